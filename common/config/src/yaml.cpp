@@ -1,0 +1,158 @@
+#include "tactile/config/yaml.hpp"
+
+#include <cmath>
+
+#include "tactile/util/files.hpp"
+
+namespace tactile::config {
+
+Node::Node(YAML::Node node, std::string path, std::shared_ptr<const std::string> source)
+    : node_(std::move(node)), path_(std::move(path)), source_(std::move(source)) {}
+
+void Node::fail(const std::string& what) const {
+  std::string where = *source_;
+  const YAML::Mark m = node_.IsDefined() ? node_.Mark() : YAML::Mark::null_mark();
+  if (m.line >= 0) where += ":" + std::to_string(m.line + 1);
+  if (path_.empty()) throw ConfigError(where + ": " + what);
+  throw ConfigError(where + ": key '" + path_ + "': " + what);
+}
+
+std::string Node::text() const {
+  if (!node_.IsDefined() || node_.IsNull()) return "<empty>";
+  if (node_.IsMap()) return "<map>";
+  if (node_.IsSequence()) return "<sequence>";
+  return "'" + node_.Scalar() + "'";
+}
+
+std::optional<Node> Node::find(std::string_view key) const {
+  if (!node_.IsMap()) return std::nullopt;
+  const std::string k(key);
+  YAML::Node child = node_[k];
+  if (!child.IsDefined()) return std::nullopt;
+  return Node(child, path_.empty() ? k : path_ + "." + k, source_);
+}
+
+Node Node::operator[](std::string_view key) const {
+  if (!node_.IsMap()) fail("must be a mapping with key '" + std::string(key) + "', is " + text());
+  auto child = find(key);
+  if (!child) {
+    const std::string full = path_.empty() ? std::string(key) : path_ + "." + std::string(key);
+    std::string where = *source_;
+    if (node_.Mark().line >= 0) where += ":" + std::to_string(node_.Mark().line + 1);
+    throw ConfigError(where + ": key '" + full + "' is missing");
+  }
+  return *child;
+}
+
+std::size_t Node::size() const {
+  if (!node_.IsSequence()) fail("must be a list, is " + text());
+  return node_.size();
+}
+
+Node Node::at(std::size_t index) const {
+  if (!node_.IsSequence()) fail("must be a list, is " + text());
+  return Node(node_[index], path_ + "[" + std::to_string(index) + "]", source_);
+}
+
+std::string Node::as_string() const {
+  if (!node_.IsScalar()) fail("must be a text value, is " + text());
+  return node_.Scalar();
+}
+
+double Node::as_double() const {
+  if (!node_.IsScalar()) fail("must be a number, is " + text());
+  double v = 0;
+  try {
+    v = node_.as<double>();
+  } catch (const YAML::Exception&) {
+    fail("must be a number, is " + text());
+  }
+  if (!std::isfinite(v)) fail("must be a finite number, is " + text());
+  return v;
+}
+
+std::int64_t Node::as_int() const {
+  if (!node_.IsScalar()) fail("must be a whole number, is " + text());
+  try {
+    return node_.as<std::int64_t>();
+  } catch (const YAML::Exception&) {
+    fail("must be a whole number, is " + text());
+  }
+}
+
+bool Node::as_bool() const {
+  if (!node_.IsScalar()) fail("must be true or false, is " + text());
+  try {
+    return node_.as<bool>();
+  } catch (const YAML::Exception&) {
+    fail("must be true or false, is " + text());
+  }
+}
+
+std::vector<double> Node::as_doubles() const {
+  const std::size_t n = size();
+  std::vector<double> out;
+  out.reserve(n);
+  for (std::size_t i = 0; i < n; ++i)
+    out.push_back(at(i).as_double());
+  return out;
+}
+
+double Node::get(std::string_view key, double fallback) const {
+  auto c = find(key);
+  return c ? c->as_double() : fallback;
+}
+std::int64_t Node::get(std::string_view key, std::int64_t fallback) const {
+  auto c = find(key);
+  return c ? c->as_int() : fallback;
+}
+int Node::get(std::string_view key, int fallback) const {
+  auto c = find(key);
+  if (!c) return fallback;
+  const std::int64_t v = c->as_int();
+  if (v < INT32_MIN || v > INT32_MAX) c->fail("is out of range: " + c->text());
+  return static_cast<int>(v);
+}
+bool Node::get(std::string_view key, bool fallback) const {
+  auto c = find(key);
+  return c ? c->as_bool() : fallback;
+}
+std::string Node::get(std::string_view key, const std::string& fallback) const {
+  auto c = find(key);
+  return c ? c->as_string() : fallback;
+}
+
+std::vector<std::string> Node::unknown_keys(std::initializer_list<std::string_view> known) const {
+  std::vector<std::string> out;
+  if (!node_.IsMap()) return out;
+  for (const auto& kv : node_) {
+    const std::string k = kv.first.Scalar();
+    bool found = false;
+    for (std::string_view q : known)
+      found = found || q == k;
+    if (!found) out.push_back(path_.empty() ? k : path_ + "." + k);
+  }
+  return out;
+}
+
+Node parse_yaml(const std::string& text, const std::string& source) {
+  auto src = std::make_shared<const std::string>(source);
+  try {
+    return Node(YAML::Load(text), "", src);
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError(source + ":" + std::to_string(e.mark.line + 1) +
+                      ": not valid YAML: " + e.msg);
+  }
+}
+
+Node load_yaml_file(const std::filesystem::path& path) {
+  std::string text;
+  try {
+    text = util::read_file(path);
+  } catch (const std::exception& e) {
+    throw ConfigError(e.what());
+  }
+  return parse_yaml(text, path.string());
+}
+
+}  // namespace tactile::config

@@ -1,0 +1,64 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tactile/curve.hpp"
+#include "tactile/geometry.hpp"
+
+namespace tactile {
+
+inline constexpr const char* kCalibrationFormat = "tactile-calibration/1";
+
+// Limits that keep every integer sum of the measurement exact in 64 bits (docs/calibration.md).
+inline constexpr int kMaxImageSide = 16384;
+inline constexpr double kMaxRadiusPx = 1024.0;
+
+struct ElementCalibration {
+  std::uint32_t id = 0;
+  Vec2 center_px;        // centre of the measurement disk S
+  double radius_px = 0;  // a pixel belongs to S when its centre is at most this far away
+  Vec2 zero_px;          // centroid under pure normal load
+  Vec3 normal{0, 0, 1};  // unit inward normal in the fingertip frame
+};
+
+// One sensor's calibration: INTERFACES.md section 1, docs/calibration.md.
+struct Calibration {
+  std::string sensor_id;
+  int width = 0;
+  int height = 0;
+  int bit_depth = 8;
+  double mm_per_px = 0;
+  double noise_floor = 0;        // gray levels subtracted from every increment before weighting
+  double contact_on = 0;         // G at which an element enters contact
+  double contact_off = 0;        // G below which it leaves contact
+  PiecewiseLinear normal_curve;  // F_z = g(G), G in gray levels, newtons
+  PiecewiseLinear shear_curve;   // F = f(u), u in mm, newtons (odd extension for u < 0)
+  std::vector<ElementCalibration> elements;
+};
+
+// A calibration that breaks a rule. key() names the offending key as a path
+// ("elements[3].radius_px", "normal_curve.G"); element_id() names the element where there is one.
+class CalibrationError : public std::runtime_error {
+ public:
+  CalibrationError(std::string key, std::optional<std::uint32_t> element_id,
+                   const std::string& what);
+  const std::string& key() const { return key_; }
+  std::optional<std::uint32_t> element_id() const { return element_id_; }
+
+ private:
+  std::string key_;
+  std::optional<std::uint32_t> element_id_;
+};
+
+// Checks every rule of INTERFACES.md section 1 that does not concern the file's syntax; throws
+// CalibrationError for the first rule broken.
+void validate(const Calibration& cal);
+
+// Number of pixels whose centres lie in the disk (the size of S).
+std::int64_t disk_pixel_count(Vec2 center, double radius);
+
+}  // namespace tactile

@@ -1,0 +1,175 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "tactile/calibration.hpp"
+#include "tactile/image.hpp"
+#include "tactile/reading.hpp"
+
+namespace tactile {
+
+// How the centroid (x_G, y_G) of a spot is estimated. All use the same increments
+// dg = g - g_ref over the element's disk S.
+enum class CentroidEstimator : std::uint8_t {
+  // Eqs. 3 and 4 with w = max(dg, 0): the paper's form, no noise floor.
+  kPlain,
+  // Eqs. 3 and 4 with w = max(dg - noise_floor, 0): the reference estimator of DESIGN.md.
+  kThresholded,
+  // The thresholded centroid, recomputed inside a soft-edged window centred on the first
+  // estimate and sized to the spot, so noise far from the spot no longer pulls the estimate
+  // toward the disk centre (docs/calibration.md).
+  kWindowed,
+  // Gaussian-weighted centroid refined by one Newton step on its score, starting from the
+  // thresholded centroid, with the weight's width taken from the spot (from G and the peak
+  // increment). For a Gaussian spot in white noise this is the maximum-likelihood position and
+  // reaches the Cramer-Rao bound; for any symmetric spot it is unbiased (docs/calibration.md).
+  kGaussian,
+};
+
+// Parses "plain", "thresholded", "windowed" or "gaussian"; nullopt otherwise.
+std::optional<CentroidEstimator> parse_estimator(std::string_view name);
+
+const char* to_string(CentroidEstimator e);
+
+struct ExtractorOptions {
+  CentroidEstimator estimator = CentroidEstimator::kGaussian;
+  // Frames a no-load reference is the mean of.
+  int reference_frames = 16;
+  // Refuse a reference whose elements show a spot (sum over the inner disk of the excess over
+  // the disk's rim ring reaching contact.on).
+  bool reference_spot_check = true;
+  // A per-frame displacement spans at most this many nominal frame periods; across a longer
+  // gap the previous frame is forgotten and displacement restarts at 0.
+  std::uint32_t max_gap_frames = 4;
+  // kWindowed: the window's half-width is the radius of the above-floor area plus this margin.
+  double window_margin_px = 2.0;
+  // kGaussian: the weight reaches this many weight-sigmas from the first estimate.
+  double gaussian_reach_sigmas = 3.5;
+};
+
+// Position of a frame in the camera's stream. `sequence` counts camera frames (lost frames
+// included), so a gap of k means k nominal periods; it never wraps.
+struct FrameInfo {
+  std::uint64_t sequence = 0;
+  std::int64_t timestamp_ns = 0;
+};
+
+enum class MeasureStatus : std::uint8_t { kOk, kNoReference, kWrongSize, kWrongFormat };
+const char* to_string(MeasureStatus s);
+
+enum class ReferenceStatus : std::uint8_t {
+  kCollecting,     // frame accepted; more frames needed
+  kComplete,       // the new reference is in use
+  kRefusedMotion,  // a frame differs from the running mean: something touches the sensor
+  kRefusedLoad,    // the mean shows load against the previous reference
+  kRefusedSpot,    // the mean shows a bright spot on an element
+  kWrongSize,
+  kWrongFormat,
+  kNoFrames,  // finish_reference() without any frame
+};
+const char* to_string(ReferenceStatus s);
+
+struct ReferenceResult {
+  ReferenceStatus status = ReferenceStatus::kCollecting;
+  int frames = 0;                // frames collected so far in this capture
+  std::uint32_t element_id = 0;  // the element that caused a refusal
+  double value = 0;              // its excess, in G units (gray levels)
+};
+
+// The measurement core: image -> per-element readings (DESIGN.md section 3).
+// Construction validates the calibration and allocates everything; measure() allocates
+// nothing, never throws and never yields NaN or infinity.
+class Extractor {
+ public:
+  explicit Extractor(Calibration cal, ExtractorOptions options = {});
+
+  const Calibration& calibration() const { return cal_; }
+  const ExtractorOptions& options() const { return opt_; }
+
+  // --- no-load reference g_ref -------------------------------------------------------------
+  // Starts a new capture. The previous reference (if any) stays in use, and is the baseline of
+  // the load check, until the new one completes.
+  void begin_reference();
+  // Adds one no-load frame; the capture completes by itself after options().reference_frames.
+  ReferenceResult add_reference_frame(const ImageView& frame);
+  // Completes a capture with the frames collected so far (at least one).
+  ReferenceResult finish_reference();
+  bool has_reference() const { return has_reference_; }
+  // The reference mean rounded to the sensor's gray levels, whole frame (to save and reload).
+  const Image& reference_image() const { return reference_image_; }
+
+  // --- per frame -----------------------------------------------------------------------------
+  MeasureStatus measure(const ImageView& frame, FrameInfo info) noexcept;
+  std::span<const ElementReading> readings() const { return readings_; }
+  // The next frame is treated as having no predecessor (no displacement).
+  void forget_previous() noexcept;
+
+ private:
+  struct Span {
+    std::int32_t y;
+    std::int32_t x0;
+    std::int32_t x1;           // exclusive
+    std::uint32_t ref_offset;  // index of (x0, y) in ref_q_
+  };
+  struct ElementLayout {
+    std::uint32_t span_begin;
+    std::uint32_t span_end;
+    std::int32_t origin_x;  // left column of the disk's bounding box
+    std::int32_t origin_y;  // top row
+  };
+  struct ElementState {
+    bool contact = false;
+    double x_px = 0;
+    double y_px = 0;
+  };
+  struct Moments {
+    std::int64_t g = 0;      // sum of w (Q8), weights for G
+    std::int64_t c0 = 0;     // sum of centroid weights (Q8)
+    std::int64_t cx = 0;     // sum of weight * (x - origin_x)
+    std::int64_t cy = 0;     // sum of weight * (y - origin_y)
+    std::int64_t above = 0;  // pixels with a positive centroid weight
+    std::int32_t peak = 0;   // largest increment (Q8)
+  };
+
+  bool geometry_matches(const ImageView& f) const;
+  template <typename Pixel>
+  Moments first_pass(const ElementLayout& el, const ImageView& f) const noexcept;
+  template <typename Pixel>
+  bool windowed_pass(const ElementLayout& el, const ImageView& f, double& x, double& y,
+                     double half_width) const noexcept;
+  template <typename Pixel>
+  bool gaussian_pass(const ElementLayout& el, const ImageView& f, double& x, double& y,
+                     double& sigma) noexcept;
+  template <typename Pixel>
+  void measure_all(const ImageView& f, std::uint32_t gap) noexcept;
+  ReferenceResult complete_reference();
+  ReferenceResult refuse(ReferenceStatus s, std::uint32_t id, double value);
+
+  Calibration cal_;
+  ExtractorOptions opt_;
+  std::int32_t floor_q_ = 0;
+  std::vector<Span> spans_;
+  std::vector<ElementLayout> layout_;
+  std::vector<std::int32_t> ref_q_;  // reference mean in Q8 (x256), disk pixels only
+  bool has_reference_ = false;
+
+  Image reference_image_;
+
+  // Reference capture (not a per-frame path): per-pixel sums over the whole frame.
+  std::vector<std::uint32_t> capture_sum_;
+  int capture_frames_ = 0;
+
+  // Scratch for kGaussian's separable weights, sized at construction to the largest disk.
+  std::vector<double> wx_, wxu_, wxu2_, wy_;
+
+  std::vector<ElementState> state_;
+  std::vector<ElementReading> readings_;
+  bool has_previous_ = false;
+  std::uint64_t previous_sequence_ = 0;
+};
+
+}  // namespace tactile
