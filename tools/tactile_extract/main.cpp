@@ -2,6 +2,8 @@
 //
 // Reads a calibration, a no-load reference (the mean of one or more PGM frames) and a sequence
 // of PGM frames; prints one JSON object per frame on standard output.
+#include <fmt/format.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <string>
@@ -23,6 +25,7 @@ struct Options {
   std::vector<std::string> frames;
   double fps = 100.0;
   std::string estimator = "gaussian";
+  std::string format = "json";
   bool no_reference_check = false;
 };
 
@@ -68,6 +71,25 @@ void append_frame_json(std::string& out, std::size_t index, double time_s,
     out += "}";
   }
   out += "]}\n";
+}
+
+void append_frame_table(std::string& out, std::size_t index, double time_s,
+                        std::span<const tactile::ElementReading> readings) {
+  std::size_t touching = 0;
+  for (const auto& r : readings)
+    touching += r.contact ? 1 : 0;
+  out += fmt::format("frame {} at {:.3f} s: {} of {} elements in contact\n", index, time_s,
+                     touching, readings.size());
+  if (touching == 0) return;
+  out +=
+      "     id        G     x_px     y_px   dx_mm   dy_mm   ux_mm   uy_mm    fx_N    fy_N    "
+      "fz_N\n";
+  for (const auto& r : readings) {
+    if (!r.contact) continue;
+    out += fmt::format(
+        "  {:5d} {:8.0f} {:8.3f} {:8.3f} {:7.4f} {:7.4f} {:7.4f} {:7.4f} {:7.3f} {:7.3f} {:7.3f}\n",
+        r.id, r.G, r.x_px, r.y_px, r.dx_mm, r.dy_mm, r.ux_mm, r.uy_mm, r.fx, r.fy, r.fz);
+  }
 }
 
 int run(const Options& opt) {
@@ -125,7 +147,11 @@ int run(const Options& opt) {
       throw std::runtime_error(path + ": " + tactile::to_string(status));
     }
     line.clear();
-    append_frame_json(line, i, static_cast<double>(i) * period_s, extractor.readings());
+    if (opt.format == "table") {
+      append_frame_table(line, i, static_cast<double>(i) * period_s, extractor.readings());
+    } else {
+      append_frame_json(line, i, static_cast<double>(i) * period_s, extractor.readings());
+    }
     // One whole line per frame: a later failure never leaves half a frame on standard output.
     if (std::fwrite(line.data(), 1, line.size(), stdout) != line.size() ||
         std::fflush(stdout) != 0) {
@@ -150,10 +176,16 @@ int main(int argc, char** argv) {
       ->required();
   app.add_option("--reference", opt.references,
                  "no-load reference frame (P5 PGM); repeat to average several")
-      ->required();
+      ->required()
+      ->allow_extra_args(false);  // one file per --reference; the rest are frames
   app.add_option("--fps", opt.fps, "frame rate the frames were taken at")->capture_default_str();
   app.add_option("--estimator", opt.estimator,
                  "centroid estimator: plain, thresholded, windowed or gaussian")
+      ->capture_default_str();
+  app.add_option("--format", opt.format,
+                 "json: one JSON object per frame (INTERFACES.md); table: a readable table of the "
+                 "elements in contact")
+      ->check(CLI::IsMember({"json", "table"}))
       ->capture_default_str();
   app.add_flag("--no-reference-check", opt.no_reference_check,
                "accept a reference that shows a spot on an element");

@@ -1,0 +1,63 @@
+#pragma once
+
+// Runs real programs from tests: arguments as given, standard output and error captured to
+// files, a deadline on every wait, and the process killed if a test ends early.
+#include <sys/types.h>
+
+#include <chrono>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tactile::testing {
+
+struct ProcessResult {
+  int exit_code = -1;  // exit status, or 128 + signal number
+  bool timed_out = false;
+  std::string out;
+  std::string err;
+};
+
+class Process {
+ public:
+  // Starts `argv[0]` (a path) with the arguments. Standard input is /dev/null.
+  explicit Process(std::vector<std::string> argv, std::vector<std::string> extra_env = {});
+  ~Process();  // kills (SIGKILL) a process still running
+  Process(const Process&) = delete;
+  Process& operator=(const Process&) = delete;
+
+  pid_t pid() const { return pid_; }
+  bool running();
+  void signal(int sig);
+  // Waits until exit or the deadline; on timeout kills the process and says so.
+  ProcessResult wait(std::chrono::milliseconds timeout);
+  // What the process wrote so far.
+  std::string out_so_far() const;
+  std::string err_so_far() const;
+
+ private:
+  pid_t pid_ = -1;
+  std::optional<int> status_;
+  std::filesystem::path dir_;
+};
+
+// Runs to completion (bounded).
+ProcessResult run(std::vector<std::string> argv,
+                  std::chrono::milliseconds timeout = std::chrono::seconds(60));
+
+// A fresh temporary directory removed when the object goes.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace tactile::testing
