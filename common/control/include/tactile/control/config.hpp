@@ -1,0 +1,98 @@
+#pragma once
+
+// Every threshold, gain, speed and place the control core uses, with its default. The table in
+// docs/control.md lists them with units; keep the two in step.
+#include <cstdint>
+#include <numbers>
+
+#include "tactile/geometry.hpp"
+
+namespace tactile::control {
+
+enum class Task : std::uint8_t {
+  kGraspMoveTwist,    // Phase I then Phase II at the place where the cap was released
+  kGraspMoveRelease,  // Phase I only
+  kTwistOnly,         // Phase II only, with the wrist pose of the first update as reference
+};
+const char* to_string(Task t);
+
+struct Config {
+  Task task = Task::kGraspMoveTwist;
+
+  // --- flags (paper section IV) ------------------------------------------------------------
+  // F1: an element pressed harder than this raises TOUCH and stops the finger. Chosen for a
+  // normal curve whose full scale is about 3 N: a firm hold on a light cap, far from F2.
+  double f1_n = 0.5;
+  // F2: an element pressed harder than this raises OVER: stop squeezing, back off.
+  double f2_n = 2.5;
+  // dr: an in-contact element slips when its per-frame centroid displacement exceeds this
+  // (the paper's 0.004 mm).
+  double dr_mm = 0.004;
+  // dr is multiplied by this in Phase II (the paper's 1.3).
+  double twist_dr_factor = 1.3;
+  // The gravity direction in the fingertip frame when the hand is upright. Only its x and y
+  // components act: the displacement has none along z_f.
+  Vec3 gravity_axis{0.0, 1.0, 0.0};
+  // A slip is classified only when its displacement along gravity exceeds this in magnitude.
+  // 0 is the paper's rule (the sign alone decides).
+  double direction_deadband_mm = 0.0;
+
+  // --- finger speed estimator (paper Fig. 6) -----------------------------------------------
+  double approach_speed_mps = 0.005;    // SEARCH: closing speed along z_f
+  double recompress_gain_mps = 0.003;   // speed added along the inward normal per slip frame
+  double recompress_duration_s = 0.05;  // a re-compression lasts this long after the last slip
+  double backoff_speed_mps = 0.001;     // OVER: speed away from the object along -z_f
+  double max_finger_speed_mps = 0.01;   // bound on every fingertip velocity's magnitude
+
+  // --- places (world frame, m) -------------------------------------------------------------
+  double cap_x_m = 0.35;
+  double cap_y_m = -0.10;
+  double bottle_x_m = 0.35;
+  double bottle_y_m = 0.10;
+  double grasp_yaw_rad = 0.0;      // wrist yaw while grasping and carrying
+  double safe_height_m = 0.25;     // MOVE1 approaches the cap at this height
+  double grasp_height_m = 0.01;    // grasp centre above the table when picking the cap up
+  double carry_height_m = 0.25;    // MOVE3 lifts to, MOVE4 carries at this height
+  double lower_limit_m = 0.0;      // MOVE5 goes no lower than this (the place is unknown)
+  double retract_height_m = 0.02;  // MOVE6 and the final retreat rise this far
+
+  // --- arm speeds ----------------------------------------------------------------------------
+  double move_speed_mps = 0.10;     // MOVE1, MOVE2, MOVE6, approach and retreat of Phase II
+  double lift_speed_mps = 0.05;     // MOVE3
+  double carry_speed_mps = 0.08;    // MOVE4
+  double lower_speed_mps = 0.02;    // MOVE5: slow enough to stop on the first contact
+  double max_yaw_rate_rps = 1.0;    // every segment but the twist
+  double twist_yaw_rate_rps = 0.5;  // TURN and RETURN
+
+  // --- grasp and release ---------------------------------------------------------------------
+  double grasp_settle_s = 0.1;    // after TOUCH on both fingertips, before "grasping ended"
+  double open_speed_mps = 0.005;  // the gentle release
+  double open_distance_m = 0.004;
+  double open_settle_s = 0.05;  // after the open's nominal duration
+
+  // --- Phase II (paper Fig. 8) -------------------------------------------------------------
+  double twist_angle_rad = std::numbers::pi / 2.0;  // wrist turn per cycle (90 degrees)
+  // Tightening turns the wrist clockwise seen from above (yaw decreases): a right-hand thread.
+  bool tighten_clockwise = true;
+  // Ns: slip detections in one cycle that mean "tight" (the paper's 8). A detection is one fresh
+  // frame of one fingertip with SLIP raised, during the TURN step.
+  std::uint32_t ns = 8;
+  // A cycle "detected slip" when it counted at least this many detections; two such cycles in a
+  // row mean "tight". 1 is the paper's rule.
+  std::uint32_t cycle_slip_min = 1;
+  std::uint32_t max_twist_cycles = 8;  // safety stop
+
+  // --- timeouts and stale data ---------------------------------------------------------------
+  double search_timeout_s = 5.0;    // SEARCH without TOUCH on both fingertips: abort
+  double segment_timeout_s = 30.0;  // a MoveTo not done after this: abort
+  // For the caller: a fingertip with no whole frame for this long is stale. The controller
+  // itself only reads FingertipInput::stale.
+  double stale_after_s = 0.1;
+  // Abort after holding on stale data this long; 0 holds for ever.
+  double stale_abort_s = 0.0;
+
+  // Throws std::invalid_argument naming the first bad field and its value.
+  void validate() const;
+};
+
+}  // namespace tactile::control

@@ -1,0 +1,40 @@
+#pragma once
+
+// The flag analyzer (paper Fig. 5): TOUCH, SLIP and OVER from the latest readings of each
+// fingertip. SEARCH and MOVE are modes the sequencer chooses; they are copied into Flags here so
+// that one struct describes the hand.
+#include <array>
+
+#include "tactile/control/config.hpp"
+#include "tactile/control/types.hpp"
+
+namespace tactile::control {
+
+class FlagAnalyzer {
+ public:
+  explicit FlagAnalyzer(const Config& cfg)
+      : f1_n_(cfg.f1_n), f2_n_(cfg.f2_n), dr_mm_(cfg.dr_mm), twist_factor_(cfg.twist_dr_factor) {}
+
+  // The slip threshold in force: dr, or dr * twist_dr_factor in Phase II.
+  double dr(bool twist_phase) const { return twist_phase ? dr_mm_ * twist_factor_ : dr_mm_; }
+
+  // One fingertip. Readings with a non-finite value are ignored (no contact). Only an
+  // in-contact reading with has_displacement on a fresh frame can slip: a frame seen again
+  // must not count twice.
+  FingertipFlags analyze(const FingertipInput& in, bool twist_phase) const noexcept;
+
+  // Both fingertips, with the fingers' mode.
+  Flags analyze(const std::array<FingertipInput, kFingertips>& in, FingerMode mode,
+                bool twist_phase) const noexcept;
+
+ private:
+  double f1_n_;
+  double f2_n_;
+  double dr_mm_;
+  double twist_factor_;
+};
+
+// The unit inward normal of element `index`, or (0, 0, 1) when the input has none usable.
+Vec3 element_normal(const FingertipInput& in, std::int32_t index) noexcept;
+
+}  // namespace tactile::control

@@ -1,0 +1,46 @@
+#pragma once
+
+// Pieces shared by the Phase I and Phase II sequencers: what a step sees, what it produces, and
+// the bookkeeping of one trajectory segment.
+#include <array>
+#include <cstdint>
+
+#include "tactile/control/types.hpp"
+
+namespace tactile::control {
+
+// Segment ids handed out by the controller, shared by both sequencers so that an id is never
+// reused within a task (the arm reports the id of the segment it is running).
+class SegmentIds {
+ public:
+  std::uint32_t take() noexcept { return next_++; }
+
+ private:
+  std::uint32_t next_ = 1;
+};
+
+struct StepInput {
+  const std::array<FingertipInput, kFingertips>& fingertips;
+  const Flags& flags;
+  const ArmFeedback& arm;
+  double t;  // task time (s): the controller's clock, frozen during stale holds
+};
+
+struct StepOutput {
+  Command command;  // at most one per update
+  EventList& events;
+  FingerMode finger_mode = FingerMode::kOff;
+};
+
+// The segment a step waits for.
+struct ActiveSegment {
+  bool active = false;
+  MoveTo move;
+  double started_s = 0;
+
+  bool done(const ArmFeedback& arm) const {
+    return active && arm.active_segment_id == move.segment_id && arm.segment_done;
+  }
+};
+
+}  // namespace tactile::control

@@ -1,0 +1,133 @@
+#include "tactile/control/config.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace tactile::control {
+
+const char* to_string(Task t) {
+  switch (t) {
+    case Task::kGraspMoveTwist:
+      return "grasp_move_twist";
+    case Task::kGraspMoveRelease:
+      return "grasp_move_release";
+    case Task::kTwistOnly:
+      return "twist_only";
+  }
+  return "?";
+}
+
+namespace {
+
+template <typename T>
+[[noreturn]] void fail(const char* field, T value, const char* rule) {
+  std::ostringstream s;
+  s << "control config: " << field << " = " << value << ": " << rule;
+  throw std::invalid_argument(s.str());
+}
+
+void finite(const char* field, double v) {
+  if (!std::isfinite(v)) fail(field, v, "must be finite");
+}
+void positive(const char* field, double v) {
+  finite(field, v);
+  if (!(v > 0)) fail(field, v, "must be > 0");
+}
+void non_negative(const char* field, double v) {
+  finite(field, v);
+  if (v < 0) fail(field, v, "must be >= 0");
+}
+void at_most(const char* field, double v, const char* bound_name, double bound) {
+  if (v > bound) {
+    const std::string rule = std::string("must be <= ") + bound_name;
+    fail(field, v, rule.c_str());
+  }
+}
+
+}  // namespace
+
+void Config::validate() const {
+  switch (task) {
+    case Task::kGraspMoveTwist:
+    case Task::kGraspMoveRelease:
+    case Task::kTwistOnly:
+      break;
+    default:
+      fail("task", static_cast<int>(task), "unknown task");
+  }
+
+  positive("f1_n", f1_n);
+  positive("f2_n", f2_n);
+  if (!(f2_n > f1_n)) fail("f2_n", f2_n, "must be > f1_n");
+  positive("dr_mm", dr_mm);
+  positive("twist_dr_factor", twist_dr_factor);
+  finite("gravity_axis.x", gravity_axis.x);
+  finite("gravity_axis.y", gravity_axis.y);
+  finite("gravity_axis.z", gravity_axis.z);
+  if (std::abs(norm(gravity_axis) - 1.0) > 1e-6) {
+    fail("gravity_axis", norm(gravity_axis), "must have unit length");
+  }
+  // The displacement lies in the x_f-y_f plane: an axis along z_f would classify nothing.
+  if (std::hypot(gravity_axis.x, gravity_axis.y) < 1e-3) {
+    fail("gravity_axis.z", gravity_axis.z, "the axis must not lie along z_f");
+  }
+  non_negative("direction_deadband_mm", direction_deadband_mm);
+
+  positive("max_finger_speed_mps", max_finger_speed_mps);
+  positive("approach_speed_mps", approach_speed_mps);
+  at_most("approach_speed_mps", approach_speed_mps, "max_finger_speed_mps", max_finger_speed_mps);
+  positive("recompress_gain_mps", recompress_gain_mps);
+  at_most("recompress_gain_mps", recompress_gain_mps, "max_finger_speed_mps", max_finger_speed_mps);
+  positive("recompress_duration_s", recompress_duration_s);
+  positive("backoff_speed_mps", backoff_speed_mps);
+  at_most("backoff_speed_mps", backoff_speed_mps, "max_finger_speed_mps", max_finger_speed_mps);
+
+  finite("cap_x_m", cap_x_m);
+  finite("cap_y_m", cap_y_m);
+  finite("bottle_x_m", bottle_x_m);
+  finite("bottle_y_m", bottle_y_m);
+  finite("grasp_yaw_rad", grasp_yaw_rad);
+  finite("grasp_height_m", grasp_height_m);
+  finite("safe_height_m", safe_height_m);
+  if (!(safe_height_m > grasp_height_m))
+    fail("safe_height_m", safe_height_m, "must be > grasp_height_m");
+  finite("carry_height_m", carry_height_m);
+  if (!(carry_height_m > grasp_height_m)) {
+    fail("carry_height_m", carry_height_m, "must be > grasp_height_m");
+  }
+  finite("lower_limit_m", lower_limit_m);
+  if (!(lower_limit_m < carry_height_m)) {
+    fail("lower_limit_m", lower_limit_m, "must be < carry_height_m");
+  }
+  positive("retract_height_m", retract_height_m);
+
+  positive("move_speed_mps", move_speed_mps);
+  positive("lift_speed_mps", lift_speed_mps);
+  positive("carry_speed_mps", carry_speed_mps);
+  positive("lower_speed_mps", lower_speed_mps);
+  positive("max_yaw_rate_rps", max_yaw_rate_rps);
+  positive("twist_yaw_rate_rps", twist_yaw_rate_rps);
+
+  non_negative("grasp_settle_s", grasp_settle_s);
+  positive("open_speed_mps", open_speed_mps);
+  positive("open_distance_m", open_distance_m);
+  non_negative("open_settle_s", open_settle_s);
+
+  positive("twist_angle_rad", twist_angle_rad);
+  if (twist_angle_rad > 2.0 * std::numbers::pi) {
+    fail("twist_angle_rad", twist_angle_rad, "must be at most one turn (2 pi)");
+  }
+  if (ns < 1) fail("ns", ns, "must be >= 1");
+  if (cycle_slip_min < 1) fail("cycle_slip_min", cycle_slip_min, "must be >= 1");
+  if (max_twist_cycles < 1) fail("max_twist_cycles", max_twist_cycles, "must be >= 1");
+
+  positive("search_timeout_s", search_timeout_s);
+  positive("segment_timeout_s", segment_timeout_s);
+  positive("stale_after_s", stale_after_s);
+  non_negative("stale_abort_s", stale_abort_s);
+}
+
+}  // namespace tactile::control

@@ -1,0 +1,119 @@
+#include "tactile/control/finger_speed_estimator.hpp"
+
+#include <cmath>
+#include <cstddef>
+#include <limits>
+
+#include "tactile/control/flag_analyzer.hpp"
+
+namespace tactile::control {
+
+namespace {
+constexpr Vec3 kZero{0.0, 0.0, 0.0};
+constexpr Vec3 kSqueeze{0.0, 0.0, 1.0};
+constexpr double kNever = -std::numeric_limits<double>::infinity();
+}  // namespace
+
+const char* to_string(FingerAction a) {
+  switch (a) {
+    case FingerAction::kIdle:
+      return "idle";
+    case FingerAction::kApproach:
+      return "approach";
+    case FingerAction::kHold:
+      return "hold";
+    case FingerAction::kRecompress:
+      return "recompress";
+    case FingerAction::kBackOff:
+      return "back_off";
+  }
+  return "?";
+}
+
+Vec3 bound_velocity(Vec3 v, double max_speed) noexcept {
+  if (!is_finite(v) || !(max_speed > 0)) return kZero;
+  const double speed = norm(v);
+  if (!std::isfinite(speed)) return kZero;
+  if (speed <= max_speed) return v;
+  // Keep the direction, shorten the vector; the factor is < 1, so the result stays finite.
+  return (max_speed / speed) * v;
+}
+
+FingerSpeedEstimator::FingerSpeedEstimator(const Config& cfg)
+    : approach_speed_(cfg.approach_speed_mps),
+      recompress_gain_(cfg.recompress_gain_mps),
+      recompress_duration_(cfg.recompress_duration_s),
+      backoff_speed_(cfg.backoff_speed_mps),
+      max_speed_(cfg.max_finger_speed_mps) {
+  reset();
+}
+
+void FingerSpeedEstimator::reset() noexcept {
+  velocity_.fill(kZero);
+  action_.fill(FingerAction::kIdle);
+  recompress_until_.fill(kNever);
+}
+
+FingerSpeedOutput FingerSpeedEstimator::update(
+    FingerMode mode, const Flags& flags, const std::array<FingertipInput, kFingertips>& inputs,
+    double now_s) noexcept {
+  if (mode != mode_) {
+    // A new mode starts from rest: a new search has touched nothing yet, and a re-compression
+    // does not outlive the step that started it.
+    mode_ = mode;
+    touched_.fill(false);
+    recompress_until_.fill(kNever);
+    if (action_[0] == FingerAction::kRecompress) action_[0] = FingerAction::kHold;
+    if (action_[1] == FingerAction::kRecompress) action_[1] = FingerAction::kHold;
+  }
+
+  FingerSpeedOutput out;
+  for (std::size_t f = 0; f < kFingertips; ++f) {
+    const FingertipFlags& ff = flags.fingertip[f];
+    const FingerAction before = action_[f];
+    Vec3 v = kZero;
+    FingerAction action = FingerAction::kIdle;
+
+    if (mode == FingerMode::kOff) {
+      action = FingerAction::kIdle;
+    } else if (ff.over) {
+      // OVER before everything: squeezing further could crush the object or the sensor.
+      v = -backoff_speed_ * kSqueeze;
+      action = FingerAction::kBackOff;
+      touched_[f] = true;
+      recompress_until_[f] = kNever;
+    } else if (mode == FingerMode::kSearch) {
+      touched_[f] = touched_[f] || ff.touch;
+      if (touched_[f]) {
+        action = FingerAction::kHold;
+      } else {
+        v = approach_speed_ * kSqueeze;
+        action = FingerAction::kApproach;
+      }
+    } else if (ff.slip) {
+      // Fig. 6: the element with the largest normal force gives the direction, its inward
+      // normal; the re-compressive velocity adds to the current one.
+      const Vec3 current = before == FingerAction::kRecompress ? velocity_[f] : kZero;
+      const Vec3 n = element_normal(inputs[f], ff.max_fz_index);
+      v = bound_velocity(current + recompress_gain_ * n, max_speed_);
+      action = FingerAction::kRecompress;
+      recompress_until_[f] = now_s + recompress_duration_;
+      out.recompress_started[f] = before != FingerAction::kRecompress;
+    } else if (before == FingerAction::kRecompress && now_s < recompress_until_[f]) {
+      v = velocity_[f];
+      action = FingerAction::kRecompress;
+    } else {
+      action = FingerAction::kHold;
+    }
+
+    out.over_started[f] = ff.over && !over_[f];
+    over_[f] = ff.over;
+    velocity_[f] = bound_velocity(v, max_speed_);
+    action_[f] = action;
+    out.velocity_mps[f] = velocity_[f];
+    out.action[f] = action;
+  }
+  return out;
+}
+
+}  // namespace tactile::control

@@ -1,0 +1,52 @@
+#include "tactile/control/slip_direction.hpp"
+
+#include <cmath>
+#include <cstddef>
+#include <limits>
+
+namespace tactile::control {
+
+const char* to_string(SlipClass c) {
+  switch (c) {
+    case SlipClass::kNone:
+      return "none";
+    case SlipClass::kGrasp:
+      return "grasp";
+    case SlipClass::kRelease:
+      return "release";
+  }
+  return "?";
+}
+
+SlipDirection analyze_slip_direction(const std::array<FingertipInput, kFingertips>& in,
+                                     const Flags& flags, Vec3 gravity_axis,
+                                     double deadband_mm) noexcept {
+  SlipDirection d;
+  double best_fz = -std::numeric_limits<double>::infinity();
+  for (std::size_t f = 0; f < kFingertips; ++f) {
+    const FingertipFlags& ff = flags.fingertip[f];
+    if (!ff.slip || ff.slip_max_fz_index == kNoElement) continue;
+    const auto i = static_cast<std::size_t>(ff.slip_max_fz_index);
+    if (i >= in[f].elements.size()) continue;
+    const ElementReading& r = in[f].elements[i];
+    // The element with the largest normal force is the centre the object turns about when it
+    // meets the ground (paper IV.b): its displacement gives the direction.
+    if (r.fz > best_fz) {
+      best_fz = r.fz;
+      d.fingertip = static_cast<std::int8_t>(f);
+      d.index = ff.slip_max_fz_index;
+      d.element_id = r.id;
+      d.fz_n = r.fz;
+      d.along_gravity_mm = gravity_axis.x * r.dx_mm + gravity_axis.y * r.dy_mm;
+    }
+  }
+  if (d.fingertip == kNoFingertip || !std::isfinite(d.along_gravity_mm)) return SlipDirection{};
+  if (d.along_gravity_mm > deadband_mm) {
+    d.classification = SlipClass::kGrasp;
+  } else if (d.along_gravity_mm < -deadband_mm) {
+    d.classification = SlipClass::kRelease;
+  }
+  return d;
+}
+
+}  // namespace tactile::control
