@@ -1,0 +1,121 @@
+#pragma once
+
+// The sensor's optics in reverse (docs/rig.md, "Optics"): each element's true normal force and
+// shear displacement become a bright spot in the fingertip camera's image, through the inverse
+// of the calibration curves the rig writes for the sensor it simulates.
+//
+// Pure: no I/O, no clocks. render() allocates nothing once the output image has its size.
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "tactile/calibration.hpp"
+#include "tactile/geometry.hpp"
+#include "tactile/image.hpp"
+#include "tactile/util/random.hpp"
+
+namespace tactile::rig {
+
+struct CameraParams {
+  double fps = 100.0;
+  int width = 640;
+  int height = 480;
+  int bit_depth = 8;
+  double noise_sigma = 2.0;      // read noise, gray levels (8-bit units)
+  double shot_noise_gain = 0.0;  // electrons per 8-bit gray level; 0: no shot noise
+  double background = 40.0;      // gray level at the image centre (8-bit units)
+  double vignetting = 0.35;      // fractional fall-off of the background at the corners
+  // Re-noise every pixel of every frame (a real-time camera stream); otherwise only the pixels
+  // of the 41 measurement disks get fresh noise each frame (nothing else is ever read).
+  bool refresh_outside_disks = false;
+};
+
+struct SensorOpticsParams {
+  double mm_per_px = 0.025;
+  double disk_radius_px = 14.0;
+  // Radius of each ring of element disks in a 480-row image (scaled with the image).
+  std::array<double, 4> ring_radius_px{0.0, 60.0, 120.0, 180.0};
+  // Spot model: a Gaussian whose peak is spot_peak_ref gray levels (8-bit) when its width is
+  // free; the width sqrt(G / (2 pi peak)) is held within [sigma_min, sigma_max], and the peak
+  // takes up the rest.
+  double spot_peak_ref = 100.0;
+  double spot_sigma_min_px = 1.2;
+  double spot_sigma_max_px = 5.5;
+  double contact_on = 400.0;  // G, 8-bit units
+  double contact_off = 250.0;
+  double noise_floor_min = 4.0;     // the calibration's noise_floor is the larger of this
+  double noise_floor_sigmas = 3.0;  // and this many background noise sigmas
+  int reference_frames = 16;        // frames the measurement's no-load reference averages
+};
+
+// Gray-level scale of the image relative to 8-bit units (1 or 257).
+double level_scale(int bit_depth);
+
+// The calibration of the simulated sensor (tactile-calibration/1): 41 element disks in rings
+// of 1, 8, 16, 16 around the image centre (element k of `normals` in ring order, its azimuth
+// from its normal), zero_px at each disk centre, the curves of INTERFACES.md section 1 (G scaled
+// to the bit depth), and each element's inward normal.
+Calibration make_calibration(const std::string& sensor_id, const CameraParams& cam,
+                             const SensorOpticsParams& opt, std::span<const Vec3> normals);
+
+// What an element's spot shows: its normal force and its shear displacement (mm, along the
+// image's columns and rows).
+struct ElementLoad {
+  double fz_n = 0;
+  double ux_mm = 0;
+  double uy_mm = 0;
+};
+
+class Renderer {
+ public:
+  // Draws a pool of standard normal samples from `noise_seed` and precomputes, per element,
+  // the expected measured G of a spot as a function of its drawn strength.
+  Renderer(const Calibration& cal, const CameraParams& cam, const SensorOpticsParams& opt,
+           std::uint64_t noise_seed);
+
+  // Renders one frame into `out` (sized on first use). Spots whose load did not change keep
+  // their cached noiseless pixels; every disk gets fresh noise from the pool at offsets drawn
+  // from `rng`. No allocation once `out` has the calibration's size and format.
+  void render(std::span<const ElementLoad> loads, util::Random& rng, Image& out);
+
+  // Expected G the measurement finds for a spot of drawn strength p (sum of its noiseless
+  // increments, output gray levels) on element k: background noise, floor and quantisation
+  // included.
+  double expected_g(std::size_t k, double p) const;
+  // The drawn strength whose expected measured G is `g` (0 for g at or below the noise's own).
+  double strength_for_g(std::size_t k, double g) const;
+  // Pixels redrawn (noiseless part recomputed) by the last render().
+  std::size_t redrawn_spots() const { return redrawn_; }
+  // Noise standard deviation of a background pixel at (x, y), output gray levels.
+  double pixel_sigma(double value_levels) const;
+  double background_at(double x, double y) const;
+
+ private:
+  struct Box {
+    int x0, y0, x1, y1;  // inclusive
+    std::size_t offset;  // into cache_
+  };
+  void draw_spot(std::size_t k, const ElementLoad& load);
+
+  Calibration cal_;
+  CameraParams cam_;
+  SensorOpticsParams opt_;
+  double scale_ = 1;
+  double max_level_ = 255;
+  std::vector<float> pool_;
+  std::vector<Box> boxes_;
+  std::vector<float> cache_value_;  // noiseless pixel values of every box
+  std::vector<float> cache_sigma_;  // their noise sigmas
+  std::vector<ElementLoad> last_;
+  std::vector<bool> drawn_;
+  // Per element: expected G at strengths strength_grid_ (monotonic).
+  std::vector<double> strength_grid_;
+  std::vector<std::vector<double>> g_table_;
+  std::vector<float> background_;
+  bool first_ = true;
+  std::size_t redrawn_ = 0;
+};
+
+}  // namespace tactile::rig

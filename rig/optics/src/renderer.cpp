@@ -1,0 +1,277 @@
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "tactile/rig/optics.hpp"
+
+namespace tactile::rig {
+namespace {
+
+constexpr std::size_t kPoolSize = std::size_t{1} << 20;
+constexpr std::array<int, 4> kRingCount{1, 8, 16, 16};
+
+// E[max(X - f, 0)] for X ~ N(mu, sigma^2).
+double partial_expectation(double mu, double f, double sigma) {
+  const double d = mu - f;
+  if (sigma <= 0) return std::max(d, 0.0);
+  const double z = d / sigma;
+  const double cdf = 0.5 * std::erfc(-z / std::numbers::sqrt2);
+  const double pdf = std::exp(-0.5 * z * z) / std::sqrt(2.0 * std::numbers::pi);
+  return d * cdf + sigma * pdf;
+}
+
+template <typename F>
+void for_each_disk_pixel(Vec2 c, double r, F&& f) {
+  const int y0 = static_cast<int>(std::ceil(c.y - r));
+  const int y1 = static_cast<int>(std::floor(c.y + r));
+  for (int y = y0; y <= y1; ++y) {
+    const int x0 = static_cast<int>(std::ceil(c.x - r));
+    const int x1 = static_cast<int>(std::floor(c.x + r));
+    for (int x = x0; x <= x1; ++x) {
+      const double dx = x - c.x;
+      const double dy = y - c.y;
+      if (dx * dx + dy * dy <= r * r) f(x, y);
+    }
+  }
+}
+
+}  // namespace
+
+double level_scale(int bit_depth) {
+  return bit_depth == 16 ? 257.0 : 1.0;
+}
+
+Calibration make_calibration(const std::string& sensor_id, const CameraParams& cam,
+                             const SensorOpticsParams& opt, std::span<const Vec3> normals) {
+  std::size_t expected = 0;
+  for (int n : kRingCount)
+    expected += static_cast<std::size_t>(n);
+  if (normals.size() != expected) {
+    throw std::invalid_argument("make_calibration: expected 41 element normals");
+  }
+  const double scale = level_scale(cam.bit_depth);
+  Calibration cal;
+  cal.sensor_id = sensor_id;
+  cal.width = cam.width;
+  cal.height = cam.height;
+  cal.bit_depth = cam.bit_depth;
+  cal.mm_per_px = opt.mm_per_px;
+  const double bg_sigma =
+      std::sqrt(cam.noise_sigma * cam.noise_sigma +
+                (cam.shot_noise_gain > 0 ? cam.background / cam.shot_noise_gain : 0.0));
+  cal.noise_floor = scale * std::max(opt.noise_floor_min, opt.noise_floor_sigmas * bg_sigma);
+  cal.contact_on = scale * opt.contact_on;
+  cal.contact_off = scale * opt.contact_off;
+  cal.normal_curve =
+      PiecewiseLinear({0, 2000 * scale, 8000 * scale, 20000 * scale}, {0, 0.2, 1.0, 3.0});
+  cal.shear_curve = PiecewiseLinear({0, 0.02, 0.08}, {0, 0.05, 0.4});
+  const Vec2 centre{(cam.width - 1) / 2.0, (cam.height - 1) / 2.0};
+  const double ring_scale = std::min(cam.width, cam.height) / 480.0;
+  std::size_t k = 0;
+  for (std::size_t ring = 0; ring < kRingCount.size(); ++ring) {
+    for (int j = 0; j < kRingCount[ring]; ++j, ++k) {
+      const Vec3 n = normals[k];
+      const double phi = std::atan2(n.y, n.x);
+      const double r = opt.ring_radius_px[ring] * ring_scale;
+      ElementCalibration e;
+      e.id = static_cast<std::uint32_t>(k);
+      e.center_px = {centre.x + r * std::cos(phi), centre.y + r * std::sin(phi)};
+      e.radius_px = opt.disk_radius_px;
+      e.zero_px = e.center_px;
+      e.normal = n;
+      cal.elements.push_back(e);
+    }
+  }
+  validate(cal);
+  return cal;
+}
+
+Renderer::Renderer(const Calibration& cal, const CameraParams& cam, const SensorOpticsParams& opt,
+                   std::uint64_t noise_seed)
+    : cal_(cal), cam_(cam), opt_(opt) {
+  validate(cal_);
+  if (cam_.width != cal_.width || cam_.height != cal_.height || cam_.bit_depth != cal_.bit_depth)
+    throw std::invalid_argument("Renderer: camera geometry differs from the calibration");
+  scale_ = level_scale(cam_.bit_depth);
+  max_level_ = cam_.bit_depth == 16 ? 65535.0 : 255.0;
+
+  util::Random noise(noise_seed);
+  pool_.resize(kPoolSize);
+  for (float& z : pool_)
+    z = static_cast<float>(noise.normal());
+
+  background_.resize(static_cast<std::size_t>(cam_.width) * static_cast<std::size_t>(cam_.height));
+  for (int y = 0; y < cam_.height; ++y)
+    for (int x = 0; x < cam_.width; ++x)
+      background_[static_cast<std::size_t>(y) * static_cast<std::size_t>(cam_.width) +
+                  static_cast<std::size_t>(x)] = static_cast<float>(background_at(x, y));
+
+  std::size_t offset = 0;
+  for (const ElementCalibration& e : cal_.elements) {
+    Box b{};
+    b.x0 = std::max(0, static_cast<int>(std::floor(e.center_px.x - e.radius_px)) - 1);
+    b.y0 = std::max(0, static_cast<int>(std::floor(e.center_px.y - e.radius_px)) - 1);
+    b.x1 = std::min(cam_.width - 1, static_cast<int>(std::ceil(e.center_px.x + e.radius_px)) + 1);
+    b.y1 = std::min(cam_.height - 1, static_cast<int>(std::ceil(e.center_px.y + e.radius_px)) + 1);
+    b.offset = offset;
+    offset += static_cast<std::size_t>(b.x1 - b.x0 + 1) * static_cast<std::size_t>(b.y1 - b.y0 + 1);
+    boxes_.push_back(b);
+  }
+  cache_value_.assign(offset, 0.0F);
+  cache_sigma_.assign(offset, 0.0F);
+  last_.assign(cal_.elements.size(), ElementLoad{});
+  drawn_.assign(cal_.elements.size(), false);
+
+  // Expected measured G against drawn strength, per element: every disk pixel's expected
+  // thresholded increment, with the noise of frame and reference and the rounding included.
+  strength_grid_.push_back(0.0);
+  for (int i = 0; i <= 120; ++i)
+    strength_grid_.push_back(scale_ * std::pow(10.0, -1.0 + 7.0 * i / 120.0));
+  const double n_ref = std::max(1, opt_.reference_frames);
+  const double ref_factor = 1.0 + 1.0 / n_ref;
+  g_table_.resize(cal_.elements.size());
+  for (std::size_t k = 0; k < cal_.elements.size(); ++k) {
+    const ElementCalibration& e = cal_.elements[k];
+    auto& table = g_table_[k];
+    table.reserve(strength_grid_.size());
+    for (double p : strength_grid_) {
+      const double peak_ref = opt_.spot_peak_ref * scale_;
+      const double sigma = std::clamp(std::sqrt(p / (2.0 * std::numbers::pi * peak_ref)),
+                                      opt_.spot_sigma_min_px, opt_.spot_sigma_max_px);
+      const double peak = p / (2.0 * std::numbers::pi * sigma * sigma);
+      double g = 0;
+      for_each_disk_pixel(e.center_px, e.radius_px, [&](int x, int y) {
+        const double dx = x - e.center_px.x;
+        const double dy = y - e.center_px.y;
+        const double bg = background_at(x, y);
+        const double s =
+            std::min(peak * std::exp(-(dx * dx + dy * dy) / (2 * sigma * sigma)), max_level_ - bg);
+        const double sd = pixel_sigma(bg + s);
+        const double sd_ref = pixel_sigma(bg);
+        const double var = sd * sd + (ref_factor - 1.0) * sd_ref * sd_ref + ref_factor / 12.0;
+        g += partial_expectation(s, cal_.noise_floor, std::sqrt(var));
+      });
+      // Monotonic by construction; guard against rounding at the saturated end.
+      if (!table.empty()) g = std::max(g, table.back());
+      table.push_back(g);
+    }
+  }
+}
+
+double Renderer::background_at(double x, double y) const {
+  const double cx = (cam_.width - 1) / 2.0;
+  const double cy = (cam_.height - 1) / 2.0;
+  const double r2 = ((x - cx) * (x - cx) + (y - cy) * (y - cy)) / (cx * cx + cy * cy);
+  return scale_ * cam_.background * (1.0 - cam_.vignetting * r2);
+}
+
+double Renderer::pixel_sigma(double value_levels) const {
+  const double read = scale_ * cam_.noise_sigma;
+  const double shot =
+      cam_.shot_noise_gain > 0 ? scale_ * std::max(value_levels, 0.0) / cam_.shot_noise_gain : 0.0;
+  return std::sqrt(read * read + shot);
+}
+
+double Renderer::expected_g(std::size_t k, double p) const {
+  const auto& t = g_table_[k];
+  const auto& s = strength_grid_;
+  if (p <= 0) return t.front();
+  const auto it = std::upper_bound(s.begin(), s.end(), p);
+  if (it == s.end()) {
+    const std::size_t n = s.size();
+    return t[n - 1] + (p - s[n - 1]) * (t[n - 1] - t[n - 2]) / (s[n - 1] - s[n - 2]);
+  }
+  const auto i = static_cast<std::size_t>(it - s.begin());
+  const double w = (p - s[i - 1]) / (s[i] - s[i - 1]);
+  return t[i - 1] + w * (t[i] - t[i - 1]);
+}
+
+double Renderer::strength_for_g(std::size_t k, double g) const {
+  const auto& t = g_table_[k];
+  const auto& s = strength_grid_;
+  if (!(g > t.front())) return 0.0;
+  const auto it = std::upper_bound(t.begin(), t.end(), g);
+  if (it == t.end()) {
+    const std::size_t n = t.size();
+    const double slope = (t[n - 1] - t[n - 2]) / (s[n - 1] - s[n - 2]);
+    return slope > 0 ? s[n - 1] + (g - t[n - 1]) / slope : s[n - 1];
+  }
+  const auto i = static_cast<std::size_t>(it - t.begin());
+  const double dt = t[i] - t[i - 1];
+  const double w = dt > 0 ? (g - t[i - 1]) / dt : 0.0;
+  return s[i - 1] + w * (s[i] - s[i - 1]);
+}
+
+void Renderer::draw_spot(std::size_t k, const ElementLoad& load) {
+  const Box& b = boxes_[k];
+  const ElementCalibration& e = cal_.elements[k];
+  const double fz = std::isfinite(load.fz_n) ? std::max(load.fz_n, 0.0) : 0.0;
+  const double p = fz > 0 ? strength_for_g(k, cal_.normal_curve.inverse(fz)) : 0.0;
+  const double peak_ref = opt_.spot_peak_ref * scale_;
+  const double sigma = std::clamp(std::sqrt(p / (2.0 * std::numbers::pi * peak_ref)),
+                                  opt_.spot_sigma_min_px, opt_.spot_sigma_max_px);
+  const double peak = p / (2.0 * std::numbers::pi * sigma * sigma);
+  const double ux = std::isfinite(load.ux_mm) ? load.ux_mm : 0.0;
+  const double uy = std::isfinite(load.uy_mm) ? load.uy_mm : 0.0;
+  const double cx = e.zero_px.x + ux / cal_.mm_per_px;
+  const double cy = e.zero_px.y + uy / cal_.mm_per_px;
+  const int w = b.x1 - b.x0 + 1;
+  const double inv = 1.0 / (2.0 * sigma * sigma);
+  std::size_t i = b.offset;
+  for (int y = b.y0; y <= b.y1; ++y) {
+    const double ey = peak > 0 ? peak * std::exp(-(y - cy) * (y - cy) * inv) : 0.0;
+    const float* bg = background_.data() + static_cast<std::size_t>(y) * cam_.width;
+    for (int x = b.x0; x < b.x0 + w; ++x, ++i) {
+      const double v = static_cast<double>(bg[x]) +
+                       (ey > 1e-6 ? ey * std::exp(-(x - cx) * (x - cx) * inv) : 0.0);
+      cache_value_[i] = static_cast<float>(v);
+      cache_sigma_[i] = static_cast<float>(pixel_sigma(v));
+    }
+  }
+}
+
+void Renderer::render(std::span<const ElementLoad> loads, util::Random& rng, Image& out) {
+  const PixelFormat fmt = cam_.bit_depth == 16 ? PixelFormat::kMono16 : PixelFormat::kMono8;
+  if (out.width() != cam_.width || out.height() != cam_.height || out.format() != fmt) {
+    out = Image(cam_.width, cam_.height, fmt);
+    first_ = true;
+  }
+  const auto quantise = [this](double v) {
+    return static_cast<std::uint32_t>(std::clamp(std::nearbyint(v), 0.0, max_level_));
+  };
+  if (first_ || cam_.refresh_outside_disks) {
+    for (int y = 0; y < cam_.height; ++y) {
+      std::size_t o = rng.below(kPoolSize - static_cast<std::size_t>(cam_.width));
+      const float* bg = background_.data() + static_cast<std::size_t>(y) * cam_.width;
+      for (int x = 0; x < cam_.width; ++x, ++o)
+        out.set(x, y,
+                quantise(static_cast<double>(bg[x]) +
+                         pixel_sigma(static_cast<double>(bg[x])) * static_cast<double>(pool_[o])));
+    }
+    first_ = false;
+  }
+  redrawn_ = 0;
+  for (std::size_t k = 0; k < boxes_.size(); ++k) {
+    const ElementLoad load = k < loads.size() ? loads[k] : ElementLoad{};
+    const ElementLoad& prev = last_[k];
+    if (!drawn_[k] || load.fz_n != prev.fz_n || load.ux_mm != prev.ux_mm ||
+        load.uy_mm != prev.uy_mm) {
+      draw_spot(k, load);
+      last_[k] = load;
+      drawn_[k] = true;
+      ++redrawn_;
+    }
+    const Box& b = boxes_[k];
+    const std::size_t w = static_cast<std::size_t>(b.x1 - b.x0 + 1);
+    const std::size_t n = w * static_cast<std::size_t>(b.y1 - b.y0 + 1);
+    std::size_t o = rng.below(kPoolSize - n);
+    std::size_t i = b.offset;
+    for (int y = b.y0; y <= b.y1; ++y) {
+      for (int x = b.x0; x <= b.x1; ++x, ++i, ++o)
+        out.set(x, y, quantise(static_cast<double>(cache_value_[i] + cache_sigma_[i] * pool_[o])));
+    }
+  }
+}
+
+}  // namespace tactile::rig

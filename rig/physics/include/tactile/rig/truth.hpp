@@ -1,0 +1,67 @@
+#pragma once
+
+// Ground truth for every camera frame (docs/rig.md, "Ground truth"): the true per-element
+// forces, shear displacements and stick/slide state, the cap's pose and angle. Mirrors the
+// wire's GroundTruth message without depending on Protobuf.
+#include <array>
+#include <cstdint>
+
+#include "tactile/rig/world.hpp"
+
+namespace tactile::rig {
+
+struct ElementTruth {
+  std::uint32_t id = 0;
+  bool contact = false;  // the feeler touches the cap
+  bool visible = false;  // in contact with F_z at or above the sensor's contact threshold
+  double fz_n = 0;       // true normal force
+  double fx_n = 0;       // true shear force along x_f
+  double fy_n = 0;       // along y_f
+  double ux_mm = 0;      // true shear displacement of the element's spot
+  double uy_mm = 0;
+  // Slip episode (see slip rule in docs/rig.md): the tip broke loose in this frame, or it broke
+  // loose earlier in an episode that continues while the cap surface keeps moving over the
+  // element's base by more than the slip threshold per frame.
+  bool sliding = false;
+  std::uint32_t releases = 0;  // stick-slip releases within the frame interval
+  double surface_mm = 0;       // cap surface motion over the element's base in the frame
+};
+
+struct FingertipTruth {
+  std::uint64_t camera_frame_id = 0;
+  std::int64_t camera_timestamp_ns = 0;
+  std::array<ElementTruth, kElementsPerFingertip> elements{};
+};
+
+struct GroundTruth {
+  double sim_time_s = 0;
+  std::array<FingertipTruth, kFingertips> fingertips{};
+  Vec3 object_position_m;
+  double cap_yaw_rad = 0;
+  double cap_angle_deg = 0;
+  bool cap_tight = false;
+  bool dropped = false;
+  bool cap_on_bottle = false;
+  CapPlace place = CapPlace::kOnTable;
+  std::uint32_t twist_cycle = 0;  // the controller's cycle as the rig last saw it (caller sets)
+};
+
+// Builds the truth of each frame from the world and keeps the slip-episode state. No
+// allocation; take() clears the world's per-frame accumulators.
+class TruthRecorder {
+ public:
+  // `visible_fz_n`: the force of the sensor's contact threshold, g(contact.on).
+  explicit TruthRecorder(double visible_fz_n) : visible_fz_n_(visible_fz_n) {}
+
+  // `slip_threshold_mm`: the per-frame displacement the measurement calls a slip at this
+  // moment (dr, or dr times the twist factor); an episode continues while the cap surface moves
+  // over an element's base by more than it.
+  const GroundTruth& take(World& world, std::uint64_t frame_id, double slip_threshold_mm);
+  const GroundTruth& last() const { return truth_; }
+
+ private:
+  double visible_fz_n_;
+  GroundTruth truth_;
+};
+
+}  // namespace tactile::rig

@@ -1,0 +1,219 @@
+#pragma once
+
+// The simulated world of the rig (docs/rig.md): an arm whose wrist follows trajectory segments
+// with bounded acceleration and vibration, two opposed fingertips with 41 rubber sensing
+// elements each on a hemispherical dome, a cap on a table, and a bottle whose neck lets the cap
+// turn freely up to free_turn_deg before resisting with a stiff, rising torque.
+//
+// Pure: no I/O, no clocks, no allocation after construction. Time is an argument: step(dt)
+// advances the world by dt with the command last applied.
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "tactile/curve.hpp"
+#include "tactile/geometry.hpp"
+
+namespace tactile::rig {
+
+inline constexpr std::size_t kFingertips = 2;
+inline constexpr std::size_t kElementsPerFingertip = 41;
+
+// --- parameters (every one has a documented default: docs/rig.md, scenario keys) -------------
+
+struct CapParams {
+  double mass_kg = 0.010;
+  double radius_m = 0.015;
+  double height_m = 0.016;
+  double friction = 0.8;        // static Coulomb coefficient mu_s between feeler and cap
+  double kinetic_ratio = 0.5;   // mu_k = kinetic_ratio * mu_s
+  double inertia_factor = 0.6;  // I = inertia_factor * m * R^2 (a shell with a top)
+  double x_m = 0.35;            // resting place on the table
+  double y_m = -0.10;
+  double table_friction = 0.4;
+};
+
+struct BottleParams {
+  double x_m = 0.35;
+  double y_m = 0.10;
+  double height_m = 0.18;                   // neck top above the table (the cap seats here)
+  double free_turn_deg = 240.0;             // the cap turns freely this far, then tightens
+  double free_torque_nm = 0.002;            // thread friction while turning freely
+  double tight_stiffness_nm_per_rad = 5.0;  // slope of the rising torque past free_turn
+  double capture_radius_m = 0.004;  // the neck's chamfer centres a cap this close to its axis
+  bool tighten_clockwise = true;    // seen from above (yaw decreasing): a right-hand thread
+};
+
+struct ArmParams {
+  double max_accel_mps2 = 0.5;      // bound on the wrist's linear acceleration
+  double max_yaw_accel_rps2 = 4.0;  // bound on the wrist's angular acceleration
+  double vibration_m = 0.0002;      // amplitude of the vertical wrist vibration
+  double vibration_hz = 12.0;
+  double vibration_rise_s = 0.2;   // the vibration grows and fades with the arm's motion
+  double finger_accel_mps2 = 1.0;  // bound on each fingertip's acceleration
+  double finger_open_m = 0.008;    // initial gap between each fingertip and the cap surface
+  Vec3 start_position_m{0.35, -0.10, 0.25};  // initial grasp centre
+  double start_yaw_rad = 0.0;
+};
+
+struct FingertipParams {
+  double dome_radius_m = 0.010;
+  // Polar angle of each ring of elements on the dome (centre, 8, 16, 16 elements).
+  std::array<double, 4> ring_polar_deg{0.0, 10.0, 20.0, 30.0};
+  double normal_stiffness_npm = 1500.0;  // F_n = k_n * indentation (+ damping)
+  double normal_damping_nspm = 0.3;
+  double tangential_damping_nspm = 0.3;  // while sticking
+  // The feeler's tangential law per fingertip axis: F = f(s) with s the tip's deflection in mm
+  // (odd). The rig uses the sensor's own calibrated shear curve, so the spot shift the camera
+  // sees is exactly the deflection.
+  PiecewiseLinear shear_curve{{0.0, 0.02, 0.08}, {0.0, 0.05, 0.4}};
+};
+
+struct WorldParams {
+  CapParams cap;
+  BottleParams bottle;
+  ArmParams arm;
+  FingertipParams fingertip;
+  double gravity_mps2 = 9.81;
+  double table_stiffness_npm = 20000.0;
+  double table_damping_nspm = 10.0;
+  double seat_stiffness_npm = 20000.0;  // the bottle neck under the cap
+  double seat_damping_nspm = 10.0;
+  double slip_speed_eps_mps = 0.001;  // regularisation of table and thread friction
+};
+
+// --- commands (the arm controller's side of ArmCommand) ----------------------------------------
+
+enum class CommandKind : std::uint8_t { kNone, kMoveTo, kFingerVelocities, kHold, kOpen, kStop };
+
+struct ArmCommand {
+  CommandKind kind = CommandKind::kNone;
+  // kMoveTo
+  std::uint32_t segment_id = 0;
+  Vec3 target_position_m;
+  double target_yaw_rad = 0;
+  double max_speed_mps = 0;
+  double max_yaw_rate_rps = 0;
+  bool keep_finger_velocities = false;
+  // kFingerVelocities: each fingertip's velocity in its own fingertip frame
+  std::array<Vec3, kFingertips> finger_velocity_mps{};
+  // kOpen
+  double open_speed_mps = 0;
+  double open_distance_m = 0;
+};
+
+// --- state ---------------------------------------------------------------------------------
+
+// One sensing element: geometry (fixed) and contact state.
+struct Element {
+  // Fixed: the feeler tip on the dome, in the fingertip frame, relative to the dome's apex,
+  // and the unit inward normal (the direction that presses it harder).
+  Vec3 tip_f;
+  Vec3 normal_f;
+  // Contact state.
+  double indentation_m = 0;
+  double fn_n = 0;               // normal force of the rubber spring (what the spot shows)
+  std::array<double, 2> s_mm{};  // tangential tip deflection along x_f, y_f (the spot shift)
+  std::array<double, 2> ft_n{};  // tangential spring force f(s) along x_f, y_f
+  bool contact = false;
+  bool sliding = false;  // the last step released the tip from static friction
+  // Accumulated since the last take_frame(): stick-slip releases and the tangential motion of
+  // the cap surface over the element's base (mm, along x_f, y_f).
+  std::uint32_t frame_releases = 0;
+  std::array<double, 2> frame_surface_mm{};
+};
+
+struct Fingertip {
+  // Apex (centre element) position in the wrist frame and its velocity in the fingertip frame.
+  Vec3 offset_w;
+  Vec3 velocity_f;
+  Vec3 commanded_velocity_f;
+  std::array<Element, kElementsPerFingertip> elements{};
+  // World frame axes of the fingertip frame and apex position.
+  Vec3 x_f, y_f, z_f;
+  Vec3 apex_world;
+};
+
+enum class CapPlace : std::uint8_t { kOnTable, kFree, kOnBottle, kThreaded };
+const char* to_string(CapPlace p);
+
+struct CapState {
+  Vec3 position_m;  // centre of the cylinder
+  Vec3 velocity_mps;
+  double yaw_rad = 0;
+  double yaw_rate_rps = 0;
+  CapPlace place = CapPlace::kOnTable;
+  double seat_yaw_rad = 0;  // yaw when it seated on the bottle
+  double angle_deg = 0;     // turned on the thread in the tightening direction since seating
+  bool tight = false;       // angle_deg passed free_turn_deg
+  bool lifted = false;      // has been off the table by more than 5 mm
+  bool dropped = false;     // fell back to the table or out of the grip
+  double thread_torque_nm = 0;
+};
+
+struct ArmState {
+  Vec3 position_m;  // grasp centre without vibration
+  Vec3 velocity_mps;
+  double yaw_rad = 0;
+  double yaw_rate_rps = 0;
+  double vibration_envelope = 0;
+  Vec3 vibration_m;  // current vibration offset
+  std::uint32_t active_segment_id = 0;
+  bool segment_done = true;
+  bool holding = false;
+  bool stopped = false;
+};
+
+// The world. Construction allocates; step() and apply() allocate nothing and never throw.
+class World {
+ public:
+  explicit World(const WorldParams& p);
+
+  const WorldParams& params() const { return p_; }
+
+  // Applies an arm command from now on (MoveTo, FingerVelocities, Hold, Open, Stop). A command
+  // with a non-finite number is refused (returns false) and changes nothing.
+  bool apply(const ArmCommand& c) noexcept;
+  // Advances by dt seconds (semi-implicit Euler). Returns false, keeping the last finite state
+  // of arm and cap and letting go of every feeler, if anything became non-finite (never seen;
+  // guarded so that no NaN can leave the physics).
+  bool step(double dt) noexcept;
+
+  double time() const { return t_; }
+  const ArmState& arm() const { return arm_; }
+  const CapState& cap() const { return cap_; }
+  const Fingertip& fingertip(std::size_t i) const { return tips_[i]; }
+  // Grasp centre including vibration, world frame.
+  Vec3 wrist_actual() const { return arm_.position_m + arm_.vibration_m; }
+
+  // Clears the per-frame accumulators (releases, surface motion) after a frame was taken.
+  void clear_frame_accumulators() noexcept;
+
+  // Unit inward normals of the 41 elements in the fingertip frame (same for both fingertips).
+  std::array<Vec3, kElementsPerFingertip> element_normals() const;
+
+ private:
+  void update_arm(double dt) noexcept;
+  void update_fingers(double dt) noexcept;
+  void place_fingertips() noexcept;
+  void contact_forces(Vec3& force, double& torque, double dt) noexcept;
+  void update_cap_place() noexcept;
+  void update_tangential(double dt) noexcept;
+  double shear_force(double s_mm) const noexcept { return p_.fingertip.shear_curve.odd(s_mm); }
+  void release_to(Element& e, double force_n) const noexcept;
+
+  WorldParams p_;
+  double t_ = 0;
+  ArmState arm_;
+  ArmCommand move_;  // the active MoveTo (or the hold target)
+  bool has_move_ = false;
+  std::array<Fingertip, kFingertips> tips_{};
+  std::array<double, kFingertips> open_left_m_{};  // distance an Open still has to go
+  bool opening_ = false;
+  double open_speed_ = 0;
+  CapState cap_;
+  double mu_k_ = 0;
+};
+
+}  // namespace tactile::rig

@@ -1,0 +1,482 @@
+#include "tactile/rig/world.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace tactile::rig {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kMmPerM = 1000.0;
+
+Vec3 cross(Vec3 a, Vec3 b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+
+// Wrist-frame axes of each fingertip frame (docs/rig.md, "Frames").
+struct FingertipAxes {
+  Vec3 x, y, z;
+};
+constexpr std::array<FingertipAxes, kFingertips> kAxesInWrist{{
+    {{0, -1, 0}, {0, 0, -1}, {1, 0, 0}},  // left: squeezes toward +x_w
+    {{0, 1, 0}, {0, 0, -1}, {-1, 0, 0}},  // right: squeezes toward -x_w
+}};
+
+Vec3 rotate_yaw(Vec3 v, double yaw) {
+  const double c = std::cos(yaw);
+  const double s = std::sin(yaw);
+  return {c * v.x - s * v.y, s * v.x + c * v.y, v.z};
+}
+
+Vec3 clamp_norm(Vec3 v, double max) {
+  const double n = norm(v);
+  return n > max && n > 0 ? (max / n) * v : v;
+}
+
+// 1-D bounded-acceleration approach of a target: the speed that still stops in time, changed
+// by at most a*dt per step.
+double approach_1d(double remaining, double v, double v_max, double a, double dt) {
+  const double stop_speed = std::sqrt(2.0 * a * std::abs(remaining));
+  const double v_des = std::copysign(std::min(v_max, stop_speed), remaining);
+  return v + std::clamp(v_des - v, -a * dt, a * dt);
+}
+
+bool finite(Vec3 v) {
+  return is_finite(v);
+}
+
+}  // namespace
+
+const char* to_string(CapPlace p) {
+  switch (p) {
+    case CapPlace::kOnTable:
+      return "on_table";
+    case CapPlace::kFree:
+      return "free";
+    case CapPlace::kOnBottle:
+      return "on_bottle";
+    case CapPlace::kThreaded:
+      return "threaded";
+  }
+  return "?";
+}
+
+World::World(const WorldParams& p) : p_(p) {
+  mu_k_ = p_.cap.kinetic_ratio * p_.cap.friction;
+  arm_.position_m = p_.arm.start_position_m;
+  arm_.yaw_rad = p_.arm.start_yaw_rad;
+  move_.target_position_m = arm_.position_m;
+  move_.target_yaw_rad = arm_.yaw_rad;
+
+  // Element layout on the dome: ring k holds 1, 8, 16, 16 elements at the given polar angle;
+  // the last ring is turned by half a step so that its feelers sit between those of ring 2.
+  constexpr std::array<int, 4> kCount{1, 8, 16, 16};
+  constexpr std::array<double, 4> kTurn{0.0, 0.0, 0.0, 0.5};
+  const double rd = p_.fingertip.dome_radius_m;
+  std::array<Element, kElementsPerFingertip> layout{};
+  std::size_t n = 0;
+  for (std::size_t ring = 0; ring < kCount.size(); ++ring) {
+    const double theta = p_.fingertip.ring_polar_deg[ring] * kPi / 180.0;
+    for (int k = 0; k < kCount[ring]; ++k) {
+      const double phi = 2.0 * kPi * (k + kTurn[ring]) / kCount[ring];
+      Element& e = layout[n++];
+      e.normal_f = {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                    std::cos(theta)};
+      e.tip_f = {rd * e.normal_f.x, rd * e.normal_f.y, -rd * (1.0 - std::cos(theta))};
+    }
+  }
+  const double open = p_.cap.radius_m + p_.arm.finger_open_m;
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    tips_[i].elements = layout;
+    tips_[i].offset_w = {i == 0 ? -open : open, 0, 0};
+  }
+  cap_.position_m = {p_.cap.x_m, p_.cap.y_m, p_.cap.height_m / 2.0};
+  cap_.place = CapPlace::kOnTable;
+  place_fingertips();
+}
+
+std::array<Vec3, kElementsPerFingertip> World::element_normals() const {
+  std::array<Vec3, kElementsPerFingertip> out{};
+  for (std::size_t k = 0; k < kElementsPerFingertip; ++k)
+    out[k] = tips_[0].elements[k].normal_f;
+  return out;
+}
+
+bool World::apply(const ArmCommand& c) noexcept {
+  if (!finite(c.target_position_m) || !std::isfinite(c.target_yaw_rad) ||
+      !std::isfinite(c.max_speed_mps) || !std::isfinite(c.max_yaw_rate_rps) ||
+      !std::isfinite(c.open_speed_mps) || !std::isfinite(c.open_distance_m) ||
+      !finite(c.finger_velocity_mps[0]) || !finite(c.finger_velocity_mps[1])) {
+    return false;
+  }
+  if (arm_.stopped) return c.kind == CommandKind::kNone;
+  switch (c.kind) {
+    case CommandKind::kNone:
+      break;
+    case CommandKind::kMoveTo:
+      move_ = c;
+      has_move_ = true;
+      arm_.active_segment_id = c.segment_id;
+      arm_.segment_done = false;
+      arm_.holding = false;
+      if (!c.keep_finger_velocities) {
+        opening_ = false;
+        for (auto& t : tips_)
+          t.commanded_velocity_f = {};
+      }
+      break;
+    case CommandKind::kFingerVelocities:
+      opening_ = false;
+      for (std::size_t i = 0; i < kFingertips; ++i)
+        tips_[i].commanded_velocity_f = c.finger_velocity_mps[i];
+      break;
+    case CommandKind::kHold:
+    case CommandKind::kStop:
+      has_move_ = false;
+      arm_.holding = true;
+      arm_.stopped = c.kind == CommandKind::kStop;
+      opening_ = false;
+      for (auto& t : tips_)
+        t.commanded_velocity_f = {};
+      break;
+    case CommandKind::kOpen:
+      opening_ = true;
+      open_speed_ = std::abs(c.open_speed_mps);
+      open_left_m_.fill(std::abs(c.open_distance_m));
+      for (auto& t : tips_)
+        t.commanded_velocity_f = {0, 0, -open_speed_};
+      break;
+  }
+  return true;
+}
+
+void World::update_arm(double dt) noexcept {
+  const double a = p_.arm.max_accel_mps2;
+  if (has_move_ && !arm_.segment_done) {
+    const Vec3 r = move_.target_position_m - arm_.position_m;
+    const double dist = norm(r);
+    Vec3 v_des{};
+    if (dist > 0) {
+      const double speed = std::min(move_.max_speed_mps, std::sqrt(2.0 * a * dist));
+      v_des = (speed / dist) * r;
+    }
+    arm_.velocity_mps = arm_.velocity_mps + clamp_norm(v_des - arm_.velocity_mps, a * dt);
+    const double yaw_left = move_.target_yaw_rad - arm_.yaw_rad;
+    arm_.yaw_rate_rps = approach_1d(yaw_left, arm_.yaw_rate_rps, move_.max_yaw_rate_rps,
+                                    p_.arm.max_yaw_accel_rps2, dt);
+    arm_.position_m = arm_.position_m + dt * arm_.velocity_mps;
+    arm_.yaw_rad += dt * arm_.yaw_rate_rps;
+    // Arrived: within one step's travel of the target and slow enough to stop in one step.
+    const Vec3 r_after = move_.target_position_m - arm_.position_m;
+    const double yaw_after = move_.target_yaw_rad - arm_.yaw_rad;
+    if (norm(r_after) <= 1e-6 && norm(arm_.velocity_mps) <= 2.0 * a * dt &&
+        std::abs(yaw_after) <= 1e-5 &&
+        std::abs(arm_.yaw_rate_rps) <= 2.0 * p_.arm.max_yaw_accel_rps2 * dt) {
+      arm_.position_m = move_.target_position_m;
+      arm_.yaw_rad = move_.target_yaw_rad;
+      arm_.velocity_mps = {};
+      arm_.yaw_rate_rps = 0;
+      arm_.segment_done = true;
+    }
+  } else {
+    // Hold, Stop or no segment: come to rest with bounded deceleration.
+    arm_.velocity_mps = arm_.velocity_mps + clamp_norm(-1.0 * arm_.velocity_mps, a * dt);
+    arm_.yaw_rate_rps =
+        arm_.yaw_rate_rps + std::clamp(-arm_.yaw_rate_rps, -p_.arm.max_yaw_accel_rps2 * dt,
+                                       p_.arm.max_yaw_accel_rps2 * dt);
+    arm_.position_m = arm_.position_m + dt * arm_.velocity_mps;
+    arm_.yaw_rad += dt * arm_.yaw_rate_rps;
+  }
+  // Vibration of the arm's servos: it grows while the arm moves and fades when it rests.
+  const bool moving = norm(arm_.velocity_mps) > 0.001 || std::abs(arm_.yaw_rate_rps) > 0.01;
+  const double rise = std::max(p_.arm.vibration_rise_s, dt);
+  arm_.vibration_envelope += ((moving ? 1.0 : 0.0) - arm_.vibration_envelope) * (dt / rise);
+  const double phase = 2.0 * kPi * p_.arm.vibration_hz * (t_ + dt);
+  arm_.vibration_m = {0, 0, p_.arm.vibration_m * arm_.vibration_envelope * std::sin(phase)};
+}
+
+void World::update_fingers(double dt) noexcept {
+  const double a = p_.arm.finger_accel_mps2;
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    Fingertip& t = tips_[i];
+    Vec3 target = t.commanded_velocity_f;
+    if (opening_ && open_left_m_[i] <= 0) target = {};
+    t.velocity_f = t.velocity_f + clamp_norm(target - t.velocity_f, a * dt);
+    const FingertipAxes& ax = kAxesInWrist[i];
+    const Vec3 v_w = t.velocity_f.x * ax.x + t.velocity_f.y * ax.y + t.velocity_f.z * ax.z;
+    t.offset_w = t.offset_w + dt * v_w;
+    if (opening_) open_left_m_[i] += dt * t.velocity_f.z;  // z_f velocity is negative
+    // The fingertips cannot cross the grasp centre nor open beyond their stroke.
+    const double side = i == 0 ? -1.0 : 1.0;
+    const double along = side * t.offset_w.x;
+    if (along < 0.001 || along > 0.06) {
+      t.offset_w.x = side * std::clamp(along, 0.001, 0.06);
+      t.velocity_f.z = 0;
+    }
+  }
+}
+
+void World::place_fingertips() noexcept {
+  const Vec3 wrist = wrist_actual();
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    Fingertip& t = tips_[i];
+    const FingertipAxes& ax = kAxesInWrist[i];
+    t.x_f = rotate_yaw(ax.x, arm_.yaw_rad);
+    t.y_f = rotate_yaw(ax.y, arm_.yaw_rad);
+    t.z_f = rotate_yaw(ax.z, arm_.yaw_rad);
+    t.apex_world = wrist + rotate_yaw(t.offset_w, arm_.yaw_rad);
+  }
+}
+
+void World::release_to(Element& e, double force_n) const noexcept {
+  // Scale the deflection along its own direction until |f(s)| equals force_n (bisection: a
+  // release is a rare event, and f is monotonic).
+  const double sx = e.s_mm[0];
+  const double sy = e.s_mm[1];
+  double lo = 0.0;
+  double hi = 1.0;
+  if (force_n > 0) {
+    for (int k = 0; k < 40; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      const double f = std::hypot(shear_force(mid * sx), shear_force(mid * sy));
+      (f > force_n ? hi : lo) = mid;
+    }
+  }
+  e.s_mm = {lo * sx, lo * sy};
+  e.ft_n = {shear_force(e.s_mm[0]), shear_force(e.s_mm[1])};
+}
+
+void World::contact_forces(Vec3& force, double& torque, double dt) noexcept {
+  const double rc = p_.cap.radius_m;
+  const double half_h = p_.cap.height_m / 2.0;
+  const double kn = p_.fingertip.normal_stiffness_npm;
+  const Vec3 c = cap_.position_m;
+  for (Fingertip& t : tips_) {
+    for (Element& e : t.elements) {
+      const Vec3 pe = t.apex_world + e.tip_f.x * t.x_f + e.tip_f.y * t.y_f + e.tip_f.z * t.z_f;
+      const double dx = pe.x - c.x;
+      const double dy = pe.y - c.y;
+      const double dz = pe.z - c.z;
+      const double d = std::hypot(dx, dy);
+      double depth = rc - d;
+      // The cap's rim: a feeler beyond the top or bottom edge loses contact over 0.5 mm.
+      const double edge = std::clamp((half_h + 0.0005 - std::abs(dz)) / 0.0005, 0.0, 1.0);
+      depth *= edge;
+      if (depth <= 0 || d <= 1e-9) {
+        e.contact = false;
+        e.indentation_m = 0;
+        e.fn_n = 0;
+        e.s_mm = {};
+        e.ft_n = {};
+        e.sliding = false;
+        continue;
+      }
+      const double rate = e.contact ? (depth - e.indentation_m) : 0.0;
+      e.contact = true;
+      e.indentation_m = depth;
+      e.fn_n = kn * depth;
+      const double fn_total = std::max(0.0, e.fn_n + p_.fingertip.normal_damping_nspm * rate / dt);
+      const Vec3 inward{-dx / d, -dy / d, 0.0};
+      Vec3 f = fn_total * inward;
+      f = f - e.ft_n[0] * t.x_f - e.ft_n[1] * t.y_f;
+      force = force + f;
+      torque += dx * f.y - dy * f.x;
+    }
+  }
+}
+
+void World::update_tangential(double dt) noexcept {
+  const Vec3 c = cap_.position_m;
+  const Vec3 wrist = wrist_actual();
+  const Vec3 vib_v{0, 0,
+                   p_.arm.vibration_m * arm_.vibration_envelope * 2.0 * kPi * p_.arm.vibration_hz *
+                       std::cos(2.0 * kPi * p_.arm.vibration_hz * (t_ + dt))};
+  const Vec3 z{0, 0, 1};
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    Fingertip& t = tips_[i];
+    const FingertipAxes& ax = kAxesInWrist[i];
+    const Vec3 v_finger = rotate_yaw(
+        t.velocity_f.x * ax.x + t.velocity_f.y * ax.y + t.velocity_f.z * ax.z, arm_.yaw_rad);
+    for (Element& e : t.elements) {
+      if (!e.contact) continue;
+      const Vec3 pe = t.apex_world + e.tip_f.x * t.x_f + e.tip_f.y * t.y_f + e.tip_f.z * t.z_f;
+      const Vec3 v_surface = cap_.velocity_mps + cap_.yaw_rate_rps * cross(z, pe - c);
+      const Vec3 v_base =
+          arm_.velocity_mps + vib_v + arm_.yaw_rate_rps * cross(z, pe - wrist) + v_finger;
+      const Vec3 v_rel = v_surface - v_base;
+      const double ds_x = dot(v_rel, t.x_f) * dt * kMmPerM;
+      const double ds_y = dot(v_rel, t.y_f) * dt * kMmPerM;
+      e.frame_surface_mm[0] += ds_x;
+      e.frame_surface_mm[1] += ds_y;
+      e.s_mm[0] += ds_x;
+      e.s_mm[1] += ds_y;
+      e.ft_n = {shear_force(e.s_mm[0]), shear_force(e.s_mm[1])};
+      e.sliding = false;
+      // Static friction holds the tip until the spring force reaches mu_s F_n; then the tip
+      // breaks loose and the spring swings through the kinetic level to 2 mu_k - mu_s (the
+      // undamped stick-slip release), where the tip sticks again.
+      if (std::hypot(e.ft_n[0], e.ft_n[1]) > p_.cap.friction * e.fn_n) {
+        release_to(e, std::max(0.0, 2.0 * mu_k_ - p_.cap.friction) * e.fn_n);
+        e.sliding = true;
+        ++e.frame_releases;
+      }
+    }
+  }
+}
+
+void World::update_cap_place() noexcept {
+  const double bottom = cap_.position_m.z - p_.cap.height_m / 2.0;
+  const double off_axis =
+      std::hypot(cap_.position_m.x - p_.bottle.x_m, cap_.position_m.y - p_.bottle.y_m);
+  bool any_contact = false;
+  for (const Fingertip& t : tips_)
+    for (const Element& e : t.elements)
+      any_contact = any_contact || e.contact;
+
+  if (bottom > 0.005) cap_.lifted = true;
+  if (cap_.place == CapPlace::kThreaded) {
+    const double sign = p_.bottle.tighten_clockwise ? -1.0 : 1.0;
+    cap_.angle_deg = sign * (cap_.yaw_rad - cap_.seat_yaw_rad) * 180.0 / kPi;
+    if (cap_.angle_deg > p_.bottle.free_turn_deg) cap_.tight = true;
+    return;
+  }
+  const bool over_neck = off_axis < p_.cap.radius_m;
+  if (over_neck && bottom <= p_.bottle.height_m + 1e-4 && bottom > p_.bottle.height_m - 0.003) {
+    cap_.place = CapPlace::kOnBottle;
+    // Let go on the neck, centred: the thread engages.
+    if (!any_contact && off_axis < 0.001) {
+      cap_.place = CapPlace::kThreaded;
+      cap_.seat_yaw_rad = cap_.yaw_rad;
+      cap_.angle_deg = 0;
+    }
+    return;
+  }
+  if (bottom <= 1e-4) {
+    if (cap_.lifted && cap_.place != CapPlace::kOnTable) cap_.dropped = true;
+    cap_.place = CapPlace::kOnTable;
+    return;
+  }
+  cap_.place = CapPlace::kFree;
+}
+
+bool World::step(double dt) noexcept {
+  if (!(dt > 0) || !std::isfinite(dt)) return false;
+  const ArmState arm_before = arm_;
+  const CapState cap_before = cap_;
+
+  update_arm(dt);
+  update_fingers(dt);
+  place_fingertips();
+
+  Vec3 force{0, 0, -p_.cap.mass_kg * p_.gravity_mps2};
+  double torque = 0;
+  contact_forces(force, torque, dt);
+
+  const double m = p_.cap.mass_kg;
+  const double inertia = p_.cap.inertia_factor * m * p_.cap.radius_m * p_.cap.radius_m;
+  const double half_h = p_.cap.height_m / 2.0;
+  const double bottom = cap_.position_m.z - half_h;
+  const Vec3 to_axis{p_.bottle.x_m - cap_.position_m.x, p_.bottle.y_m - cap_.position_m.y, 0};
+  const double off_axis = std::hypot(to_axis.x, to_axis.y);
+
+  // Supports: the table top, and the bottle neck under a cap that meets it.
+  double support_n = 0;  // normal force of the table (for its friction)
+  double friction_torque_max = 0;
+  double thread_torque = 0;
+  if (bottom < 0) {
+    support_n = std::max(
+        0.0, -p_.table_stiffness_npm * bottom - p_.table_damping_nspm * cap_.velocity_mps.z);
+    force.z += support_n;
+    friction_torque_max = p_.cap.table_friction * support_n * (2.0 / 3.0) * p_.cap.radius_m;
+  }
+  const bool on_neck = cap_.place == CapPlace::kOnBottle || cap_.place == CapPlace::kThreaded ||
+                       (off_axis < p_.cap.radius_m && bottom < p_.bottle.height_m &&
+                        bottom > p_.bottle.height_m - 0.003);
+  if (on_neck) {
+    const double pen = p_.bottle.height_m - bottom;
+    double fz = p_.seat_stiffness_npm * pen - p_.seat_damping_nspm * cap_.velocity_mps.z;
+    // Before the thread engages the neck only pushes; after, it holds the cap both ways.
+    if (cap_.place != CapPlace::kThreaded) fz = std::max(0.0, fz);
+    force.z += fz;
+    if (off_axis < p_.bottle.capture_radius_m || cap_.place == CapPlace::kThreaded) {
+      force.x += p_.seat_stiffness_npm * to_axis.x - p_.seat_damping_nspm * cap_.velocity_mps.x;
+      force.y += p_.seat_stiffness_npm * to_axis.y - p_.seat_damping_nspm * cap_.velocity_mps.y;
+    }
+    if (cap_.place == CapPlace::kThreaded) {
+      const double sign = p_.bottle.tighten_clockwise ? -1.0 : 1.0;
+      const double over = cap_.angle_deg - p_.bottle.free_turn_deg;
+      if (over > 0) {
+        const double rate = sign * cap_.yaw_rate_rps;
+        const double k = p_.bottle.tight_stiffness_nm_per_rad;
+        const double damping = 2.0 * std::sqrt(k * inertia);
+        thread_torque = -sign * (k * over * kPi / 180.0 + damping * std::max(rate, 0.0));
+      }
+      friction_torque_max += p_.bottle.free_torque_nm;
+    }
+  }
+  torque += thread_torque;
+
+  // Semi-implicit Euler; the table's and thread's Coulomb friction by the implicit regularised
+  // form: a viscous law stiff enough to hold, capped at the Coulomb value.
+  const double eps = p_.slip_speed_eps_mps;
+  Vec3 v = cap_.velocity_mps + (dt / m) * force;
+  if (support_n > 0) {
+    const double c = p_.cap.table_friction * support_n / eps;
+    const Vec3 vh{v.x, v.y, 0};
+    const Vec3 vh_new = (1.0 / (1.0 + dt * c / m)) * vh;
+    Vec3 fr = (m / dt) * (vh_new - vh);
+    fr = clamp_norm(fr, p_.cap.table_friction * support_n);
+    v = v + (dt / m) * fr;
+  }
+  double w = cap_.yaw_rate_rps + dt * torque / inertia;
+  if (friction_torque_max > 0) {
+    const double c = friction_torque_max * p_.cap.radius_m / eps;
+    const double w_new = w / (1.0 + dt * c / inertia);
+    const double tf =
+        std::clamp((w_new - w) * inertia / dt, -friction_torque_max, friction_torque_max);
+    w += dt * tf / inertia;
+  }
+  cap_.velocity_mps = v;
+  cap_.yaw_rate_rps = w;
+  cap_.position_m = cap_.position_m + dt * v;
+  cap_.yaw_rad += dt * w;
+  cap_.thread_torque_nm = thread_torque;
+
+  update_tangential(dt);
+  update_cap_place();
+  t_ += dt;
+
+  bool ok = finite(cap_.position_m) && finite(cap_.velocity_mps) && std::isfinite(cap_.yaw_rad) &&
+            std::isfinite(cap_.yaw_rate_rps) && finite(arm_.position_m);
+  for (const Fingertip& t : tips_) {
+    for (const Element& e : t.elements) {
+      ok = ok && std::isfinite(e.fn_n) && std::isfinite(e.s_mm[0]) && std::isfinite(e.s_mm[1]);
+    }
+  }
+  if (!ok) {
+    // Never seen; if it happens, keep the last finite state and let go of every feeler.
+    arm_ = arm_before;
+    cap_ = cap_before;
+    for (Fingertip& t : tips_) {
+      for (Element& e : t.elements) {
+        e = Element{e.tip_f, e.normal_f};
+      }
+    }
+    place_fingertips();
+    t_ -= dt;
+    return false;
+  }
+  return true;
+}
+
+void World::clear_frame_accumulators() noexcept {
+  for (Fingertip& t : tips_) {
+    for (Element& e : t.elements) {
+      e.frame_releases = 0;
+      e.frame_surface_mm = {};
+    }
+  }
+}
+
+}  // namespace tactile::rig

@@ -1,0 +1,43 @@
+#pragma once
+
+// Scenario files for the rig (INTERFACES.md section 3; every key and default in docs/rig.md).
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "tactile/rig/optics.hpp"
+#include "tactile/rig/world.hpp"
+
+namespace tactile::rig {
+
+inline constexpr const char* kScenarioFormat = "tactile-scenario/1";
+
+struct Scenario {
+  std::string source;  // file name, for messages
+  std::uint64_t seed = 1;
+  WorldParams world;
+  CameraParams camera;
+  SensorOpticsParams optics;
+  double dt_s = 1e-4;         // physics step; a frame period holds a whole number of steps
+  double max_time_s = 120.0;  // simulated time after which a run stops, incomplete
+  double settle_after_done_s = 0.3;
+  // Controller settings the scenario overrides (names as in the `controller` section; the
+  // lockstep runner maps them onto the control core's Config).
+  std::vector<std::pair<std::string, double>> controller;
+
+  // Physics steps per camera frame and the step that makes them fit exactly.
+  int steps_per_frame() const;
+  double step_s() const;
+};
+
+// Names the `controller` section accepts.
+const std::vector<std::string>& controller_keys();
+
+// Parses a scenario; every error throws config::ConfigError naming the file, line, key and
+// value. Unknown keys are refused (a typo would silently change an experiment).
+Scenario parse_scenario(const std::string& text, const std::string& source);
+Scenario load_scenario(const std::filesystem::path& path);
+
+}  // namespace tactile::rig
