@@ -1,0 +1,34 @@
+#pragma once
+
+// Encoding and decoding of the one message type that crosses every socket: tactile.v1.Envelope.
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "tactile/v1/tactile.pb.h"
+
+namespace tactile::wire {
+
+inline constexpr std::uint32_t kSchemaVersion = 1;
+// Larger messages are refused before parsing (a TactileFrame of 41 elements is about 4 KiB).
+inline constexpr std::size_t kMaxMessageBytes = 1 << 20;
+
+enum class DecodeStatus : std::uint8_t {
+  kOk,
+  kTooLarge,      // more than kMaxMessageBytes
+  kMalformed,     // not a Protobuf Envelope
+  kWrongVersion,  // schema_version other than kSchemaVersion
+  kEmpty,         // no body
+  kInvalid,       // parses, but a value breaks a rule (non-finite number, wrong element count...)
+};
+const char* to_string(DecodeStatus s);
+
+// Parses `bytes` into `out` (reused: no allocation once its fields have grown to size).
+// Never throws.
+DecodeStatus decode(std::span<const std::uint8_t> bytes, v1::Envelope& out) noexcept;
+
+// Sets the schema version and serialises into `buffer` (its capacity is reused).
+void encode(v1::Envelope& envelope, std::string& buffer);
+
+}  // namespace tactile::wire

@@ -1,0 +1,79 @@
+#pragma once
+
+// Thin ZeroMQ endpoints: they only move bytes. Would-block and timeouts are values (false);
+// real failures (a bad endpoint, a port in use) throw std::runtime_error naming the endpoint.
+#include <chrono>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+#include <zmq.hpp>
+
+namespace tactile::wire {
+
+// PUB side of a tactile, event or ground-truth stream.
+class Publisher {
+ public:
+  Publisher(zmq::context_t& ctx, const std::string& endpoint);
+  // Sends [topic, payload]. Never blocks: past the high-water mark a PUB socket drops.
+  void send(std::string_view topic, std::span<const std::uint8_t> payload);
+  // The endpoint actually bound (a wildcard port resolved), e.g. "tcp://0.0.0.0:5555".
+  std::string endpoint() const;
+
+ private:
+  zmq::socket_t socket_;
+};
+
+struct TopicMessage {
+  std::string topic;
+  std::vector<std::uint8_t> payload;  // capacity reused from message to message
+};
+
+// SUB side: connects to one or more publishers and subscribes to topic prefixes.
+class Subscriber {
+ public:
+  Subscriber(zmq::context_t& ctx, const std::vector<std::string>& endpoints,
+             const std::vector<std::string>& topics);
+  // Waits up to `timeout` for one [topic, payload] message. A message of another shape is
+  // dropped and counted (malformed()). Messages larger than kMaxMessageBytes never arrive.
+  bool receive(TopicMessage& out, std::chrono::milliseconds timeout);
+  std::uint64_t malformed() const { return malformed_; }
+
+ private:
+  zmq::socket_t socket_;
+  std::uint64_t malformed_ = 0;
+};
+
+// hand_node's side of the arm link.
+class Dealer {
+ public:
+  Dealer(zmq::context_t& ctx, const std::string& endpoint);
+  // False when it would block (the arm controller is absent and the queue is full).
+  bool send(std::span<const std::uint8_t> payload);
+  bool receive(std::vector<std::uint8_t>& payload, std::chrono::milliseconds timeout);
+  std::uint64_t malformed() const { return malformed_; }
+
+ private:
+  zmq::socket_t socket_;
+  std::uint64_t malformed_ = 0;
+};
+
+// The arm controller's side of the arm link.
+class Router {
+ public:
+  Router(zmq::context_t& ctx, const std::string& endpoint);
+  // Receives one message and the identity of the peer that sent it.
+  bool receive(std::string& peer, std::vector<std::uint8_t>& payload,
+               std::chrono::milliseconds timeout);
+  // False when the peer is unknown (gone) or it would block.
+  bool send(const std::string& peer, std::span<const std::uint8_t> payload);
+  std::string endpoint() const;
+  std::uint64_t malformed() const { return malformed_; }
+
+ private:
+  zmq::socket_t socket_;
+  std::uint64_t malformed_ = 0;
+};
+
+}  // namespace tactile::wire

@@ -1,0 +1,182 @@
+#include "tactile/wire/sockets.hpp"
+
+#include <stdexcept>
+
+#include "tactile/wire/envelope.hpp"
+
+namespace tactile::wire {
+namespace {
+
+void common_options(zmq::socket_t& s) {
+  s.set(zmq::sockopt::linger, 0);
+}
+
+void receiving_options(zmq::socket_t& s) {
+  s.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxMessageBytes));
+}
+
+void bind_or_throw(zmq::socket_t& s, const char* kind, const std::string& endpoint) {
+  try {
+    s.bind(endpoint);
+  } catch (const zmq::error_t& e) {
+    throw std::runtime_error(std::string("cannot bind ") + kind + " socket to '" + endpoint +
+                             "': " + e.what());
+  }
+}
+
+void connect_or_throw(zmq::socket_t& s, const char* kind, const std::string& endpoint) {
+  try {
+    s.connect(endpoint);
+  } catch (const zmq::error_t& e) {
+    throw std::runtime_error(std::string("cannot connect ") + kind + " socket to '" + endpoint +
+                             "': " + e.what());
+  }
+}
+
+bool wait_readable(zmq::socket_t& s, std::chrono::milliseconds timeout) {
+  zmq::pollitem_t item{s.handle(), 0, ZMQ_POLLIN, 0};
+  try {
+    return zmq::poll(&item, 1, timeout) > 0;
+  } catch (const zmq::error_t& e) {
+    if (e.num() == EINTR) return false;  // a signal: the caller checks its stop flag
+    throw;
+  }
+}
+
+// Receives the remaining parts of a multipart message and throws them away.
+void drain(zmq::socket_t& s) {
+  zmq::message_t part;
+  while (s.get(zmq::sockopt::rcvmore)) {
+    if (!s.recv(part, zmq::recv_flags::dontwait)) break;
+  }
+}
+
+void copy_to(const zmq::message_t& m, std::vector<std::uint8_t>& out) {
+  const auto* p = static_cast<const std::uint8_t*>(m.data());
+  out.assign(p, p + m.size());
+}
+
+}  // namespace
+
+Publisher::Publisher(zmq::context_t& ctx, const std::string& endpoint)
+    : socket_(ctx, zmq::socket_type::pub) {
+  common_options(socket_);
+  bind_or_throw(socket_, "PUB", endpoint);
+}
+
+void Publisher::send(std::string_view topic, std::span<const std::uint8_t> payload) {
+  socket_.send(zmq::buffer(topic.data(), topic.size()),
+               zmq::send_flags::sndmore | zmq::send_flags::dontwait);
+  socket_.send(zmq::buffer(payload.data(), payload.size()), zmq::send_flags::dontwait);
+}
+
+std::string Publisher::endpoint() const {
+  return socket_.get(zmq::sockopt::last_endpoint);
+}
+
+Subscriber::Subscriber(zmq::context_t& ctx, const std::vector<std::string>& endpoints,
+                       const std::vector<std::string>& topics)
+    : socket_(ctx, zmq::socket_type::sub) {
+  common_options(socket_);
+  receiving_options(socket_);
+  for (const auto& t : topics)
+    socket_.set(zmq::sockopt::subscribe, t);
+  for (const auto& e : endpoints)
+    connect_or_throw(socket_, "SUB", e);
+}
+
+bool Subscriber::receive(TopicMessage& out, std::chrono::milliseconds timeout) {
+  if (!wait_readable(socket_, timeout)) return false;
+  zmq::message_t topic;
+  if (!socket_.recv(topic, zmq::recv_flags::dontwait)) return false;
+  if (!topic.more()) {
+    ++malformed_;
+    return false;
+  }
+  zmq::message_t payload;
+  if (!socket_.recv(payload, zmq::recv_flags::dontwait)) return false;
+  if (payload.more()) {
+    drain(socket_);
+    ++malformed_;
+    return false;
+  }
+  out.topic.assign(static_cast<const char*>(topic.data()), topic.size());
+  copy_to(payload, out.payload);
+  return true;
+}
+
+Dealer::Dealer(zmq::context_t& ctx, const std::string& endpoint)
+    : socket_(ctx, zmq::socket_type::dealer) {
+  common_options(socket_);
+  receiving_options(socket_);
+  socket_.set(zmq::sockopt::sndhwm, 100);
+  connect_or_throw(socket_, "DEALER", endpoint);
+}
+
+bool Dealer::send(std::span<const std::uint8_t> payload) {
+  return socket_.send(zmq::buffer(payload.data(), payload.size()), zmq::send_flags::dontwait)
+      .has_value();
+}
+
+bool Dealer::receive(std::vector<std::uint8_t>& payload, std::chrono::milliseconds timeout) {
+  if (!wait_readable(socket_, timeout)) return false;
+  zmq::message_t m;
+  if (!socket_.recv(m, zmq::recv_flags::dontwait)) return false;
+  if (m.more()) {
+    drain(socket_);
+    ++malformed_;
+    return false;
+  }
+  copy_to(m, payload);
+  return true;
+}
+
+Router::Router(zmq::context_t& ctx, const std::string& endpoint)
+    : socket_(ctx, zmq::socket_type::router) {
+  common_options(socket_);
+  receiving_options(socket_);
+  // Sending to a peer that is gone fails instead of vanishing silently.
+  socket_.set(zmq::sockopt::router_mandatory, true);
+  bind_or_throw(socket_, "ROUTER", endpoint);
+}
+
+bool Router::receive(std::string& peer, std::vector<std::uint8_t>& payload,
+                     std::chrono::milliseconds timeout) {
+  if (!wait_readable(socket_, timeout)) return false;
+  zmq::message_t id;
+  if (!socket_.recv(id, zmq::recv_flags::dontwait)) return false;
+  if (!id.more()) {
+    ++malformed_;
+    return false;
+  }
+  zmq::message_t m;
+  if (!socket_.recv(m, zmq::recv_flags::dontwait)) return false;
+  if (m.more()) {
+    drain(socket_);
+    ++malformed_;
+    return false;
+  }
+  peer.assign(static_cast<const char*>(id.data()), id.size());
+  copy_to(m, payload);
+  return true;
+}
+
+bool Router::send(const std::string& peer, std::span<const std::uint8_t> payload) {
+  try {
+    if (!socket_.send(zmq::buffer(peer.data(), peer.size()),
+                      zmq::send_flags::sndmore | zmq::send_flags::dontwait)) {
+      return false;
+    }
+    return socket_.send(zmq::buffer(payload.data(), payload.size()), zmq::send_flags::dontwait)
+        .has_value();
+  } catch (const zmq::error_t& e) {
+    if (e.num() == EHOSTUNREACH) return false;  // the peer is gone
+    throw;
+  }
+}
+
+std::string Router::endpoint() const {
+  return socket_.get(zmq::sockopt::last_endpoint);
+}
+
+}  // namespace tactile::wire
