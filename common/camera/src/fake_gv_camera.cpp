@@ -1,0 +1,258 @@
+#include "tactile/camera/fake_gv_camera.hpp"
+
+#include <arpa/inet.h>
+#include <fmt/core.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <mutex>
+#include <stdexcept>
+#include <vector>
+
+#include "aravis_support.hpp"
+#include "tactile/camera/private_network.hpp"
+#include "tactile/util/clock.hpp"
+
+namespace tactile::camera {
+
+// GigE Vision sends Mono16 little-endian; ImageView holds host-endian pixels, and the frame is
+// passed through with one memcpy.
+static_assert(std::endian::native == std::endian::little,
+              "FakeGvCamera copies Mono16 pixels as they are: a little-endian host is assumed");
+
+namespace {
+
+bool gvcp_port_taken(const std::string& address) {
+  sockaddr_in local{};
+  local.sin_family = AF_INET;
+  local.sin_port = htons(3956);
+  if (inet_pton(AF_INET, address.c_str(), &local.sin_addr) != 1) return false;
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return false;
+  const bool taken = ::bind(fd, reinterpret_cast<const sockaddr*>(&local), sizeof(local)) != 0 &&
+                     errno == EADDRINUSE;
+  ::close(fd);
+  return taken;
+}
+
+}  // namespace
+
+void FakeGvCameraOptions::validate() const {
+  auto bad = [](std::string_view option, const auto& value, std::string_view rule) {
+    return std::invalid_argument(
+        fmt::format("fake camera option {} = {}: {}", option, value, rule));
+  };
+  in_addr parsed{};
+  if (inet_pton(AF_INET, address.c_str(), &parsed) != 1) {
+    throw bad("address", address, "must be an IPv4 address such as 127.0.0.2");
+  }
+  if (serial.empty() || serial.size() > 15)
+    throw bad("serial", serial, "must have 1 to 15 characters");
+  if (width < 1 || width > 2048) throw bad("width", width, "must be in 1..2048");
+  if (height < 1 || height > 2048) throw bad("height", height, "must be in 1..2048");
+  if (!(frame_rate_hz >= 0.1 && frame_rate_hz <= 1000.0)) {
+    throw bad("frame_rate_hz", frame_rate_hz, "must be in 0.1..1000");
+  }
+  if (!(gvsp_lost_ratio >= 0.0 && gvsp_lost_ratio <= 1.0)) {
+    throw bad("gvsp_lost_ratio", gvsp_lost_ratio, "must be in 0..1");
+  }
+}
+
+struct FakeGvCamera::Impl {
+  explicit Impl(FakeGvCameraOptions o) : options(std::move(o)) {
+    options.validate();
+    format = {options.width, options.height, options.pixel_format};
+    for (auto& image : images)
+      image.resize(format.payload_bytes());
+  }
+
+  ~Impl() {
+    // Joins the camera thread first: nothing below is touched afterwards.
+    camera.reset();
+  }
+
+  // Declared first: destroyed last, after the fake camera.
+  detail::AravisUse aravis;
+  FakeGvCameraOptions options;
+  FrameFormat format;
+
+  // The double buffer. The renderer writes the back image without a lock, then swaps under
+  // front_mutex; the camera thread copies the front image under front_mutex. A swap therefore
+  // waits for a copy in progress, and the image a renderer writes is never being read.
+  std::mutex publish_mutex;
+  std::mutex front_mutex;
+  std::array<std::vector<std::uint8_t>, 2> images;
+  std::array<std::uint64_t, 2> frame_ids{};
+  std::array<std::int64_t, 2> timestamps{};
+  int front = -1;       // -1: nothing published yet
+  SentFrame last_sent;  // guarded by front_mutex
+
+  std::mutex observer_mutex;
+  SentObserver observer;
+  std::atomic<std::uint64_t> frames_sent{0};
+  std::atomic<double> lost_ratio{0.0};
+
+  detail::GPtr<ArvGvFakeCamera> camera;  // declared last: destroyed first
+
+  static void fill(ArvBuffer* buffer, void* user_data, guint32 /*exposure_time_us*/,
+                   guint32 /*gain*/, ArvPixelFormat pixel_format) {
+    // Runs once per frame on the fake camera's only thread, which also answers GVCP: one copy.
+    auto* self = static_cast<Impl*>(user_data);
+    SentFrame sent;
+    sent.block_id = arv_buffer_get_frame_id(buffer);
+    sent.fill_time_ns = util::realtime_ns();
+    const int width = arv_buffer_get_image_width(buffer);
+    const int height = arv_buffer_get_image_height(buffer);
+    // Size from the geometry: arv_buffer_get_data reports 0 here (Aravis issue 955).
+    const std::size_t bytes = detail::frame_bytes(width, height, pixel_format);
+    void* data = const_cast<void*>(arv_buffer_get_data(buffer, nullptr));
+    sent.format_matched = width == self->format.width && height == self->format.height &&
+                          pixel_format == detail::to_arv(self->format.pixel_format) &&
+                          bytes == self->format.payload_bytes();
+    {
+      const std::lock_guard lock(self->front_mutex);
+      if (self->front >= 0 && sent.format_matched && data != nullptr) {
+        const auto f = static_cast<std::size_t>(self->front);
+        std::memcpy(data, self->images[f].data(), bytes);
+        sent.frame_id = self->frame_ids[f];
+        sent.timestamp_ns = self->timestamps[f];
+      }
+      self->last_sent = sent;
+    }
+    // The receiver's camera timestamp: the renderer's, so ground truth matches exactly.
+    arv_buffer_set_timestamp(buffer, static_cast<guint64>(sent.timestamp_ns));
+    self->frames_sent.fetch_add(1, std::memory_order_relaxed);
+    const std::lock_guard lock(self->observer_mutex);
+    if (self->observer) self->observer(sent);
+  }
+
+  [[noreturn]] void throw_port_taken() const {
+    throw std::runtime_error(fmt::format(
+        "fake GigE Vision camera {}: cannot serve on {}: GVCP port 3956 on that address is "
+        "already taken (another fake camera, arv-fake-gv-camera-0.8?)",
+        options.serial, options.address));
+  }
+
+  void start() {
+    // GLib binds UDP sockets with SO_REUSEADDR, so a second fake camera on the same address
+    // would start and steal the first one's packets: probe the port without it first.
+    if (gvcp_port_taken(options.address)) throw_port_taken();
+    camera.reset(arv_gv_fake_camera_new(options.address.c_str(), options.serial.c_str()));
+    if (!camera || arv_gv_fake_camera_is_running(camera.get()) == FALSE) {
+      camera.reset();
+      if (!ipv4_address_assigned(options.address)) {
+        throw std::runtime_error(fmt::format(
+            "fake GigE Vision camera {}: address {} is not assigned to any interface. Add it "
+            "(root): `ip addr add {}/8 dev lo` (remove it later with `ip addr del {}/8 dev lo`), "
+            "or run inside a private network namespace: `unshare -rn sh -c 'ip link set lo up; "
+            "ip addr add {}/8 dev lo; exec PROGRAM'` (tactile::camera::enter_private_network "
+            "does the same in-process)",
+            options.serial, options.address, options.address, options.address, options.address));
+      }
+      throw_port_taken();
+    }
+    ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(camera.get());  // not owned
+    arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH,
+                                   static_cast<guint32>(options.width));
+    arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT,
+                                   static_cast<guint32>(options.height));
+    arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT,
+                                   static_cast<guint32>(detail::to_arv(options.pixel_format)));
+    arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
+                                   static_cast<guint32>(std::llround(1e6 / options.frame_rate_hz)));
+    set_lost_ratio(options.gvsp_lost_ratio);
+    detail::set_fill_pattern(fake, &Impl::fill, this);
+  }
+
+  void set_lost_ratio(double ratio) {
+    if (!(ratio >= 0.0 && ratio <= 1.0)) {
+      throw std::invalid_argument(
+          fmt::format("fake camera option gvsp_lost_ratio = {}: must be in 0..1", ratio));
+    }
+    g_object_set(camera.get(), "gvsp-lost-ratio", ratio, nullptr);
+    lost_ratio.store(ratio);
+  }
+
+  bool publish(const ImageView& image, std::uint64_t frame_id, std::int64_t timestamp_ns) noexcept {
+    if (image.data == nullptr || image.width != format.width || image.height != format.height ||
+        image.format != format.pixel_format) {
+      return false;
+    }
+    const std::size_t row_bytes =
+        static_cast<std::size_t>(format.width) * bytes_per_pixel(format.pixel_format);
+    if (image.stride_bytes < row_bytes) return false;
+
+    const std::lock_guard publishing(publish_mutex);
+    // Only publishers change `front`, and they hold publish_mutex: reading it here is safe.
+    const std::size_t back = front == 0 ? 1 : 0;
+    std::uint8_t* out = images[back].data();
+    if (image.stride_bytes == row_bytes) {
+      std::memcpy(out, image.data, format.payload_bytes());
+    } else {
+      for (int y = 0; y < format.height; ++y) {
+        std::memcpy(out + static_cast<std::size_t>(y) * row_bytes,
+                    image.data + static_cast<std::size_t>(y) * image.stride_bytes, row_bytes);
+      }
+    }
+    frame_ids[back] = frame_id;
+    timestamps[back] = timestamp_ns;
+    const std::lock_guard swapping(front_mutex);
+    front = static_cast<int>(back);
+    return true;
+  }
+};
+
+FakeGvCamera::FakeGvCamera(FakeGvCameraOptions options)
+    : impl_(std::make_unique<Impl>(std::move(options))) {
+  impl_->start();
+}
+
+FakeGvCamera::~FakeGvCamera() = default;
+
+bool FakeGvCamera::is_running() const noexcept {
+  return impl_->camera && arv_gv_fake_camera_is_running(impl_->camera.get()) != FALSE;
+}
+
+const FakeGvCameraOptions& FakeGvCamera::options() const noexcept {
+  return impl_->options;
+}
+
+FrameFormat FakeGvCamera::format() const noexcept {
+  return impl_->format;
+}
+
+bool FakeGvCamera::publish(const ImageView& image, std::uint64_t frame_id,
+                           std::int64_t timestamp_ns) noexcept {
+  return impl_->publish(image, frame_id, timestamp_ns);
+}
+
+void FakeGvCamera::set_gvsp_lost_ratio(double ratio) {
+  impl_->set_lost_ratio(ratio);
+}
+
+double FakeGvCamera::gvsp_lost_ratio() const noexcept {
+  return impl_->lost_ratio.load();
+}
+
+void FakeGvCamera::set_sent_observer(SentObserver observer) {
+  const std::lock_guard lock(impl_->observer_mutex);
+  impl_->observer = std::move(observer);
+}
+
+SentFrame FakeGvCamera::last_sent() const noexcept {
+  const std::lock_guard lock(impl_->front_mutex);
+  return impl_->last_sent;
+}
+
+std::uint64_t FakeGvCamera::frames_sent() const noexcept {
+  return impl_->frames_sent.load(std::memory_order_relaxed);
+}
+
+}  // namespace tactile::camera
