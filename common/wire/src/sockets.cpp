@@ -1,5 +1,7 @@
 #include "tactile/wire/sockets.hpp"
 
+#include <algorithm>
+#include <array>
 #include <stdexcept>
 
 #include "tactile/wire/envelope.hpp"
@@ -57,6 +59,26 @@ void copy_to(const zmq::message_t& m, std::vector<std::uint8_t>& out) {
 }
 
 }  // namespace
+
+unsigned poll_readable(std::span<zmq::socket_ref> sockets, std::chrono::milliseconds timeout) {
+  std::array<zmq::pollitem_t, 8> items{};
+  const std::size_t n = std::min(sockets.size(), items.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    items[i].socket = sockets[i].handle();
+    items[i].events = ZMQ_POLLIN;
+  }
+  try {
+    if (zmq::poll(items.data(), n, timeout) <= 0) return 0;
+  } catch (const zmq::error_t& e) {
+    if (e.num() == EINTR) return 0;
+    throw;
+  }
+  unsigned mask = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if ((items[i].revents & ZMQ_POLLIN) != 0) mask |= 1U << i;
+  }
+  return mask;
+}
 
 Publisher::Publisher(zmq::context_t& ctx, const std::string& endpoint)
     : socket_(ctx, zmq::socket_type::pub) {

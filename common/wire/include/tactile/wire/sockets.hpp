@@ -12,6 +12,10 @@
 
 namespace tactile::wire {
 
+// Waits up to `timeout` until at least one of the sockets has a message; returns a bit mask
+// (bit i: sockets[i] is readable), 0 on timeout or when a signal interrupted the wait.
+unsigned poll_readable(std::span<zmq::socket_ref> sockets, std::chrono::milliseconds timeout);
+
 // PUB side of a tactile, event or ground-truth stream.
 class Publisher {
  public:
@@ -39,6 +43,7 @@ class Subscriber {
   // dropped and counted (malformed()). Messages larger than kMaxMessageBytes never arrive.
   bool receive(TopicMessage& out, std::chrono::milliseconds timeout);
   std::uint64_t malformed() const { return malformed_; }
+  zmq::socket_ref socket() { return socket_; }
 
  private:
   zmq::socket_t socket_;
@@ -53,6 +58,7 @@ class Dealer {
   bool send(std::span<const std::uint8_t> payload);
   bool receive(std::vector<std::uint8_t>& payload, std::chrono::milliseconds timeout);
   std::uint64_t malformed() const { return malformed_; }
+  zmq::socket_ref socket() { return socket_; }
 
  private:
   zmq::socket_t socket_;
@@ -70,6 +76,7 @@ class Router {
   bool send(const std::string& peer, std::span<const std::uint8_t> payload);
   std::string endpoint() const;
   std::uint64_t malformed() const { return malformed_; }
+  zmq::socket_ref socket() { return socket_; }
 
  private:
   zmq::socket_t socket_;

@@ -1,0 +1,140 @@
+#include "tactile/config/controller_file.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace tactile::config {
+namespace {
+
+using control::Config;
+
+struct DoubleField {
+  const char* name;
+  double Config::*member;
+};
+
+struct CountField {
+  const char* name;
+  std::uint32_t Config::*member;
+};
+
+const DoubleField kDoubles[] = {
+    {"f1_n", &Config::f1_n},
+    {"f2_n", &Config::f2_n},
+    {"dr_mm", &Config::dr_mm},
+    {"twist_dr_factor", &Config::twist_dr_factor},
+    {"direction_deadband_mm", &Config::direction_deadband_mm},
+    {"approach_speed_mps", &Config::approach_speed_mps},
+    {"recompress_gain_mps", &Config::recompress_gain_mps},
+    {"recompress_duration_s", &Config::recompress_duration_s},
+    {"backoff_speed_mps", &Config::backoff_speed_mps},
+    {"max_finger_speed_mps", &Config::max_finger_speed_mps},
+    {"cap_x_m", &Config::cap_x_m},
+    {"cap_y_m", &Config::cap_y_m},
+    {"bottle_x_m", &Config::bottle_x_m},
+    {"bottle_y_m", &Config::bottle_y_m},
+    {"grasp_yaw_rad", &Config::grasp_yaw_rad},
+    {"safe_height_m", &Config::safe_height_m},
+    {"grasp_height_m", &Config::grasp_height_m},
+    {"carry_height_m", &Config::carry_height_m},
+    {"lower_limit_m", &Config::lower_limit_m},
+    {"retract_height_m", &Config::retract_height_m},
+    {"move_speed_mps", &Config::move_speed_mps},
+    {"lift_speed_mps", &Config::lift_speed_mps},
+    {"carry_speed_mps", &Config::carry_speed_mps},
+    {"lower_speed_mps", &Config::lower_speed_mps},
+    {"max_yaw_rate_rps", &Config::max_yaw_rate_rps},
+    {"twist_yaw_rate_rps", &Config::twist_yaw_rate_rps},
+    {"grasp_settle_s", &Config::grasp_settle_s},
+    {"open_speed_mps", &Config::open_speed_mps},
+    {"open_distance_m", &Config::open_distance_m},
+    {"open_settle_s", &Config::open_settle_s},
+    {"twist_angle_rad", &Config::twist_angle_rad},
+    {"search_timeout_s", &Config::search_timeout_s},
+    {"segment_timeout_s", &Config::segment_timeout_s},
+    {"stale_after_s", &Config::stale_after_s},
+    {"stale_abort_s", &Config::stale_abort_s},
+};
+
+const CountField kCounts[] = {
+    {"ns", &Config::ns},
+    {"cycle_slip_min", &Config::cycle_slip_min},
+    {"max_twist_cycles", &Config::max_twist_cycles},
+};
+
+}  // namespace
+
+std::vector<std::string> controller_config_keys() {
+  std::vector<std::string> keys{"task"};
+  for (const auto& f : kDoubles)
+    keys.emplace_back(f.name);
+  keys.emplace_back("twist_angle_deg");
+  keys.emplace_back("gravity_axis");
+  keys.emplace_back("tighten_clockwise");
+  for (const auto& f : kCounts)
+    keys.emplace_back(f.name);
+  return keys;
+}
+
+control::Config parse_controller_config(const Node& section, std::vector<std::string>* warnings) {
+  Config cfg;
+  if (section.is_null()) return cfg;
+  if (!section.is_map())
+    section.fail("must be a mapping of controller parameters, is " + section.text());
+
+  if (auto t = section.find("task")) {
+    const std::string v = t->as_string();
+    bool known = false;
+    for (auto task : {control::Task::kGraspMoveTwist, control::Task::kGraspMoveRelease,
+                      control::Task::kTwistOnly}) {
+      if (v == control::to_string(task)) {
+        cfg.task = task;
+        known = true;
+      }
+    }
+    if (!known)
+      t->fail("must be grasp_move_twist, grasp_move_release or twist_only, is " + t->text());
+  }
+  for (const auto& f : kDoubles) {
+    if (auto n = section.find(f.name)) cfg.*(f.member) = n->as_double();
+  }
+  if (auto n = section.find("twist_angle_deg")) {
+    if (section.has("twist_angle_rad"))
+      n->fail("give twist_angle_deg or twist_angle_rad, not both");
+    cfg.twist_angle_rad = n->as_double() * std::numbers::pi / 180.0;
+  }
+  for (const auto& f : kCounts) {
+    if (auto n = section.find(f.name)) {
+      const std::int64_t v = n->as_int();
+      if (v < 0 || v > 1000000) n->fail("must be a count from 0 to 1000000, is " + n->text());
+      cfg.*(f.member) = static_cast<std::uint32_t>(v);
+    }
+  }
+  if (auto n = section.find("gravity_axis")) {
+    const auto v = n->as_doubles();
+    if (v.size() != 3)
+      n->fail("must be a list of 3 numbers [x, y, z], has " + std::to_string(v.size()));
+    cfg.gravity_axis = {v[0], v[1], v[2]};
+  }
+  if (auto n = section.find("tighten_clockwise")) cfg.tighten_clockwise = n->as_bool();
+
+  if (warnings != nullptr) {
+    const auto keys = controller_config_keys();
+    for (const auto& k : section.unknown_keys({})) {
+      const std::string leaf = k.substr(k.rfind('.') + 1);
+      bool known = false;
+      for (const auto& q : keys)
+        known = known || q == leaf;
+      if (!known) warnings->push_back(section.source() + ": unknown key '" + k + "' ignored");
+    }
+  }
+  try {
+    cfg.validate();
+  } catch (const std::invalid_argument& e) {
+    section.fail(e.what());
+  }
+  return cfg;
+}
+
+}  // namespace tactile::config

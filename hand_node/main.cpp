@@ -1,0 +1,73 @@
+// hand_node: subscribes to the fingertips' TactileFrames, runs the flags, the finger speed
+// estimator and the grasp-move-twist sequencers, and commands the arm controller.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+
+#include "src/hand_config.hpp"
+#include "src/hand_node.hpp"
+#include "tactile/util/log.hpp"
+#include "tactile/util/stop.hpp"
+
+namespace {
+
+int run(int argc, char** argv) {
+  std::string config_path;
+  std::vector<std::string> subscribe;
+  std::string arm;
+  std::string events;
+  std::string log_level = "info";
+  CLI::App app{
+      "hand_node: the hand PC of the tactile slippage control system. Subscribes to "
+      "TactileFrames, raises SEARCH/MOVE/TOUCH/SLIP/OVER, estimates finger speeds with "
+      "re-compression on slip, runs grasp-move-release and grasp-twist, and sends "
+      "ArmCommands to the arm controller."};
+  app.add_option("--config", config_path, "configuration file (tactile-hand/1 YAML)")->required();
+  app.add_option("--subscribe", subscribe,
+                 "sensor_node endpoint to subscribe to (repeatable; replaces the file's list)")
+      ->allow_extra_args(false);
+  app.add_option("--arm", arm,
+                 "arm controller endpoint (default tcp://127.0.0.1:5556 or the file's)");
+  app.add_option("--events", events, "publish events on this endpoint (e.g. tcp://*:5558)");
+  app.add_option("--log-level", log_level, "debug, info, warn or error")->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "hand_node: %s (try --help)\n", e.what());
+    return 2;
+  }
+  try {
+    tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
+    std::vector<std::string> warnings;
+    tactile::hand::HandConfig cfg = tactile::hand::load_hand_config(config_path, &warnings);
+    for (const auto& w : warnings)
+      tactile::util::log_warn("{}", w);
+    if (!subscribe.empty()) cfg.subscribe = subscribe;
+    if (!arm.empty()) cfg.arm = arm;
+    if (!events.empty()) cfg.events = events;
+    tactile::util::install_stop_handlers();
+    zmq::context_t ctx;
+    tactile::hand::HandNode node(std::move(cfg), ctx);
+    switch (node.run()) {
+      case tactile::hand::Outcome::kDone:
+        tactile::util::log_info("task done");
+        return 0;
+      case tactile::hand::Outcome::kStopped:
+        return 0;
+      case tactile::hand::Outcome::kAborted:
+        tactile::util::log_error("task aborted");
+        return 3;
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "hand_node: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  tactile::util::set_program_name("hand_node");
+  return run(argc, argv);
+}

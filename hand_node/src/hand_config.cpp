@@ -1,0 +1,70 @@
+#include "hand_config.hpp"
+
+#include "tactile/config/calibration_file.hpp"
+#include "tactile/config/controller_file.hpp"
+#include "tactile/config/yaml.hpp"
+
+namespace tactile::hand {
+
+HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::string>* warnings) {
+  const config::Node root = config::load_yaml_file(path);
+  if (!root.is_map()) root.fail("a hand_node configuration must be a YAML mapping");
+  if (warnings != nullptr) {
+    for (const auto& k : root.unknown_keys({"format", "fingertips", "subscribe", "arm", "events",
+                                            "heartbeat_period_s", "control_period_s",
+                                            "arm_timeout_s", "controller"})) {
+      warnings->push_back(path.string() + ": unknown key '" + k + "' ignored");
+    }
+  }
+  const config::Node format = root["format"];
+  if (format.as_string() != kHandConfigFormat) {
+    format.fail(std::string("must be '") + kHandConfigFormat + "', is " + format.text());
+  }
+  HandConfig cfg;
+  const config::Node tips = root["fingertips"];
+  if (tips.size() != control::kFingertips) {
+    tips.fail(
+        "must list exactly 2 fingertips (0: left, squeezing toward +x of the wrist; 1: right), "
+        "has " +
+        std::to_string(tips.size()));
+  }
+  const auto base = path.parent_path();
+  for (std::size_t i = 0; i < control::kFingertips; ++i) {
+    const config::Node t = tips.at(i);
+    FingertipConfig& f = cfg.fingertips[i];
+    f.sensor_id = t["sensor_id"].as_string();
+    if (f.sensor_id.empty()) t["sensor_id"].fail("must not be empty");
+    const config::Node cal = t["calibration"];
+    f.calibration_path = base / cal.as_string();
+    f.calibration = config::load_calibration(f.calibration_path, warnings);
+    if (f.calibration.sensor_id != f.sensor_id) {
+      cal.fail("holds sensor '" + f.calibration.sensor_id + "', not '" + f.sensor_id + "'");
+    }
+    for (const auto& e : f.calibration.elements)
+      f.normals.push_back(e.normal);
+  }
+  if (cfg.fingertips[0].sensor_id == cfg.fingertips[1].sensor_id) {
+    tips.at(1)["sensor_id"].fail("repeats the sensor id of fingertip 0");
+  }
+  if (auto s = root.find("subscribe")) {
+    cfg.subscribe.clear();
+    for (std::size_t i = 0; i < s->size(); ++i)
+      cfg.subscribe.push_back(s->at(i).as_string());
+    if (cfg.subscribe.empty()) s->fail("must list at least one sensor_node endpoint");
+  }
+  cfg.arm = root.get("arm", cfg.arm);
+  cfg.events = root.get("events", cfg.events);
+  const auto positive = [&](const char* key, double fallback) {
+    const double v = root.get(key, fallback);
+    if (!(v > 0)) root[key].fail("must be a positive number of seconds, is " + root[key].text());
+    return v;
+  };
+  cfg.heartbeat_period_s = positive("heartbeat_period_s", cfg.heartbeat_period_s);
+  cfg.control_period_s = positive("control_period_s", cfg.control_period_s);
+  cfg.arm_timeout_s = positive("arm_timeout_s", cfg.arm_timeout_s);
+  if (auto c = root.find("controller"))
+    cfg.controller = config::parse_controller_config(*c, warnings);
+  return cfg;
+}
+
+}  // namespace tactile::hand

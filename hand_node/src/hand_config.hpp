@@ -1,0 +1,39 @@
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "tactile/calibration.hpp"
+#include "tactile/control/config.hpp"
+#include "tactile/control/types.hpp"
+
+namespace tactile::hand {
+
+inline constexpr const char* kHandConfigFormat = "tactile-hand/1";
+
+struct FingertipConfig {
+  std::string sensor_id;
+  std::filesystem::path calibration_path;
+  Calibration calibration;    // for element ids and inward normals
+  std::vector<Vec3> normals;  // calibration normals, in calibration order
+};
+
+// hand_node's configuration file (docs/hand_node.md).
+struct HandConfig {
+  std::array<FingertipConfig, control::kFingertips> fingertips;
+  std::vector<std::string> subscribe{"tcp://127.0.0.1:5555"};
+  std::string arm = "tcp://127.0.0.1:5556";
+  std::string events;               // PUB endpoint for events; empty: none
+  double heartbeat_period_s = 0.1;  // a Heartbeat to the arm controller when idle this long
+  double control_period_s = 0.005;  // the controller also runs this often without new frames
+  double arm_timeout_s = 1.0;       // no ArmState for this long: the arm controller is gone
+  control::Config controller;
+};
+
+// Loads and checks the file; throws config::ConfigError naming file, line, key and value.
+// Calibration paths are relative to the configuration file's folder.
+HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::string>* warnings);
+
+}  // namespace tactile::hand

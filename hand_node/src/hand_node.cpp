@@ -1,0 +1,235 @@
+#include "hand_node.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include "tactile/util/clock.hpp"
+#include "tactile/util/log.hpp"
+#include "tactile/util/stop.hpp"
+#include "tactile/wire/envelope.hpp"
+
+namespace tactile::hand {
+namespace {
+
+std::span<const std::uint8_t> bytes(const std::string& s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
+
+std::int64_t seconds_to_ns(double s) {
+  return static_cast<std::int64_t>(s * 1e9);
+}
+
+}  // namespace
+
+HandNode::HandNode(HandConfig cfg, zmq::context_t& ctx)
+    : cfg_(std::move(cfg)),
+      ids_{cfg_.fingertips[0].sensor_id, cfg_.fingertips[1].sensor_id},
+      sub_(ctx, cfg_.subscribe, {"frame/" + ids_[0], "frame/" + ids_[1]}),
+      arm_(ctx, cfg_.arm),
+      controller_(cfg_.controller) {
+  if (!cfg_.events.empty()) events_.emplace(ctx, cfg_.events);
+  for (std::size_t i = 0; i < control::kFingertips; ++i) {
+    frames_[i].elements.resize(cfg_.fingertips[i].calibration.elements.size());
+  }
+}
+
+wire::Answers HandNode::answers() const {
+  wire::Answers a;
+  for (std::size_t i = 0; i < control::kFingertips; ++i) {
+    if (!have_frame_[i]) continue;
+    a.add({static_cast<std::int8_t>(i), frames_[i].header.sequence,
+           frames_[i].header.camera_timestamp_ns});
+  }
+  return a;
+}
+
+void HandNode::send_envelope() {
+  wire::encode(out_, out_bytes_);
+  if (arm_.send(bytes(out_bytes_))) {
+    last_sent_ns_ = util::monotonic_ns();
+  } else {
+    ++counters_.commands_blocked;
+  }
+}
+
+void HandNode::send_command(const control::Command& c, std::int64_t now_ns) {
+  (void)now_ns;
+  wire::fill_arm_command(c, ++command_sequence_, util::realtime_ns(), answers(), ids_,
+                         *out_.mutable_arm_command());
+  send_envelope();
+  ++counters_.commands;
+}
+
+void HandNode::send_heartbeat(std::int64_t now_ns) {
+  (void)now_ns;
+  auto* hb = out_.mutable_heartbeat();
+  hb->set_time_ns(util::realtime_ns());
+  hb->set_sender("hand_node");
+  send_envelope();
+}
+
+void HandNode::on_topic_message() {
+  const auto status = wire::decode(msg_.payload, in_);
+  if (status != wire::DecodeStatus::kOk || !in_.has_tactile_frame()) {
+    ++counters_.undecodable;
+    return;
+  }
+  const v1::TactileFrame& f = in_.tactile_frame();
+  int k = -1;
+  for (std::size_t i = 0; i < control::kFingertips; ++i) {
+    if (f.sensor_id() == ids_[i]) k = static_cast<int>(i);
+  }
+  if (k < 0) {
+    ++counters_.undecodable;
+    return;
+  }
+  const auto ki = static_cast<std::size_t>(k);
+  wire::ReceivedFrame& frame = frames_[ki];
+  // Decode into a scratch copy of the header first: an invalid or incomplete frame must not
+  // replace the last whole one the controller holds.
+  const wire::FrameHeader previous = frame.header;
+  if (f.status() != v1::FRAME_STATUS_COMPLETE) {
+    ++counters_.incomplete[ki];
+    return;
+  }
+  if (wire::read_tactile_frame(f, cfg_.fingertips[ki].calibration, frame) !=
+      wire::DecodeStatus::kOk) {
+    frame.header = previous;
+    ++counters_.undecodable;
+    return;
+  }
+  ++counters_.frames[ki];
+  have_frame_[ki] = true;
+  const std::int64_t now = util::monotonic_ns();
+  last_whole_ns_[ki] = now;
+  step(now, k);
+}
+
+void HandNode::on_arm_message() {
+  if (wire::decode(arm_buf_, in_) != wire::DecodeStatus::kOk) {
+    ++counters_.undecodable;
+    return;
+  }
+  if (in_.has_arm_state()) {
+    if (wire::read_arm_state(in_.arm_state(), ids_, arm_state_) != wire::DecodeStatus::kOk) {
+      ++counters_.undecodable;
+      return;
+    }
+    ++counters_.arm_states;
+    have_arm_ = true;
+    last_arm_ns_ = util::monotonic_ns();
+    if (arm_silent_reported_) {
+      util::log_info("arm controller heard again");
+      arm_silent_reported_ = false;
+    }
+  } else if (in_.has_heartbeat()) {
+    last_arm_ns_ = util::monotonic_ns();
+  } else {
+    ++counters_.undecodable;
+  }
+}
+
+bool HandNode::ready(std::int64_t now_ns) {
+  if (started_) return true;
+  if (have_arm_ && have_frame_[0] && have_frame_[1]) {
+    started_ = true;
+    start_ns_ = now_ns;
+    util::log_info("arm controller and both fingertips ({}, {}) are live: starting the task ({})",
+                   ids_[0], ids_[1], control::to_string(cfg_.controller.task));
+    return true;
+  }
+  if (!waiting_reported_) {
+    util::log_info("waiting for the arm controller at {} and tactile frames of {} and {}", cfg_.arm,
+                   ids_[0], ids_[1]);
+    waiting_reported_ = true;
+  }
+  return false;
+}
+
+void HandNode::step(std::int64_t now_ns, int fresh_fingertip) {
+  if (!ready(now_ns)) return;
+  last_update_ns_ = now_ns;
+  control::ControllerInput in;
+  const std::int64_t stale_ns = seconds_to_ns(cfg_.controller.stale_after_s);
+  bool any_stale = false;
+  for (std::size_t i = 0; i < control::kFingertips; ++i) {
+    control::FingertipInput& t = in.fingertips[i];
+    t.elements = frames_[i].elements;
+    t.normals = cfg_.fingertips[i].normals;
+    t.sequence = frames_[i].header.sequence;
+    t.camera_timestamp_ns = frames_[i].header.camera_timestamp_ns;
+    t.fresh = static_cast<int>(i) == fresh_fingertip;
+    t.stale = !have_frame_[i] || now_ns - last_whole_ns_[i] > stale_ns;
+    any_stale = any_stale || t.stale;
+  }
+  if (any_stale && !stale_) ++counters_.stale_holds;
+  stale_ = any_stale;
+  in.arm = wire::to_feedback(arm_state_);
+  in.now_s = static_cast<double>(now_ns - start_ns_) * 1e-9;
+
+  const control::ControllerOutput out = controller_.update(in);
+  if (out.command.kind != control::CommandKind::kNone) send_command(out.command, now_ns);
+  for (const control::Event& e : out.events) {
+    ++counters_.events;
+    const std::string where =
+        e.fingertip >= 0 ? " " + ids_[static_cast<std::size_t>(e.fingertip)] : "";
+    util::log_info("event {} [{}{}{}]{}{}", control::to_string(e.kind), control::to_string(e.phase),
+                   e.cycle > 0 ? " cycle " + std::to_string(e.cycle) : "", where,
+                   e.has_element ? " element " + std::to_string(e.element_id) : "",
+                   e.text[0] != '\0' ? std::string(": ") + e.text : "");
+    if (events_) {
+      wire::fill_event(e, util::realtime_ns(), answers(), ids_, *event_env_.mutable_event());
+      wire::encode(event_env_, out_bytes_);
+      events_->send("event", bytes(out_bytes_));
+    }
+  }
+}
+
+Outcome HandNode::run() {
+  util::log_info("subscribing to {} sensor endpoint(s), arm controller at {}",
+                 cfg_.subscribe.size(), cfg_.arm);
+  const std::int64_t period_ns = seconds_to_ns(cfg_.control_period_s);
+  const std::int64_t heartbeat_ns = seconds_to_ns(cfg_.heartbeat_period_s);
+  const std::int64_t arm_timeout_ns = seconds_to_ns(cfg_.arm_timeout_s);
+  last_sent_ns_ = util::monotonic_ns() - heartbeat_ns;  // announce ourselves at once
+  std::array<zmq::socket_ref, 2> sockets{sub_.socket(), arm_.socket()};
+  Outcome outcome = Outcome::kStopped;
+  while (!util::stop_requested()) {
+    std::int64_t now = util::monotonic_ns();
+    const std::int64_t until_tick = std::max<std::int64_t>(0, last_update_ns_ + period_ns - now);
+    const auto wait =
+        std::chrono::milliseconds(std::min<std::int64_t>(until_tick / 1000000 + 1, 50));
+    wire::poll_readable(sockets, wait);
+    while (sub_.receive(msg_, std::chrono::milliseconds(0)))
+      on_topic_message();
+    while (arm_.receive(arm_buf_, std::chrono::milliseconds(0)))
+      on_arm_message();
+    now = util::monotonic_ns();
+    // Time-driven steps (timeouts, settling, staleness) run even when no frame arrives.
+    if (now - last_update_ns_ >= period_ns) step(now, -1);
+    if (now - last_sent_ns_ >= heartbeat_ns) send_heartbeat(now);
+    if (have_arm_ && !arm_silent_reported_ && now - last_arm_ns_ > arm_timeout_ns) {
+      util::log_warn("no word from the arm controller for {:.1f} s",
+                     static_cast<double>(now - last_arm_ns_) * 1e-9);
+      arm_silent_reported_ = true;
+    }
+    if (controller_.done()) {
+      outcome = controller_.phase() == control::Phase::kDone ? Outcome::kDone : Outcome::kAborted;
+      break;
+    }
+  }
+  if (outcome == Outcome::kStopped) {
+    util::log_info("stop requested: sending Stop to the arm");
+    send_command(control::Command::stop(), util::monotonic_ns());
+  }
+  util::log_info(
+      "frames used {}/{}, skipped incomplete {}/{}, undecodable {}, commands {} (blocked {}), "
+      "events {}, "
+      "stale holds {}",
+      counters_.frames[0], counters_.frames[1], counters_.incomplete[0], counters_.incomplete[1],
+      counters_.undecodable, counters_.commands, counters_.commands_blocked, counters_.events,
+      counters_.stale_holds);
+  return outcome;
+}
+
+}  // namespace tactile::hand

@@ -1,0 +1,84 @@
+#pragma once
+
+// hand_node's loop: TactileFrames in, the control core, ArmCommands out (docs/hand_node.md).
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+#include <zmq.hpp>
+
+#include "hand_config.hpp"
+#include "tactile/control/controller.hpp"
+#include "tactile/wire/arm.hpp"
+#include "tactile/wire/sockets.hpp"
+#include "tactile/wire/tactile_frame.hpp"
+
+namespace tactile::hand {
+
+struct HandCounters {
+  std::array<std::uint64_t, control::kFingertips> frames{};  // whole frames used
+  std::array<std::uint64_t, control::kFingertips>
+      incomplete{};                    // frames with another status: skipped
+  std::uint64_t undecodable = 0;       // malformed, wrong version, invalid values, unknown sensor
+  std::uint64_t commands = 0;          // ArmCommands sent
+  std::uint64_t commands_blocked = 0;  // could not be queued (arm controller absent)
+  std::uint64_t arm_states = 0;
+  std::uint64_t events = 0;
+  std::uint64_t stale_holds = 0;
+};
+
+enum class Outcome { kDone, kAborted, kStopped };
+
+class HandNode {
+ public:
+  HandNode(HandConfig cfg, zmq::context_t& ctx);
+
+  // Runs until the task ends or util::stop_requested(); on every way out a Stop goes to the arm.
+  Outcome run();
+  const HandCounters& counters() const { return counters_; }
+
+ private:
+  void on_topic_message();
+  void on_arm_message();
+  void step(std::int64_t now_ns, int fresh_fingertip);
+  void send_command(const control::Command& c, std::int64_t now_ns);
+  void send_heartbeat(std::int64_t now_ns);
+  void send_envelope();
+  wire::Answers answers() const;
+  bool ready(std::int64_t now_ns);
+
+  HandConfig cfg_;
+  wire::FingertipIds ids_;
+  wire::Subscriber sub_;
+  wire::Dealer arm_;
+  std::optional<wire::Publisher> events_;
+  control::GraspMoveTwistController controller_;
+
+  // Reused buffers: the per-frame path allocates nothing once they have grown.
+  wire::TopicMessage msg_;
+  std::vector<std::uint8_t> arm_buf_;
+  v1::Envelope in_;
+  v1::Envelope out_;
+  v1::Envelope event_env_;
+  std::string out_bytes_;
+  std::array<wire::ReceivedFrame, control::kFingertips> frames_;
+  wire::ReceivedCommand unused_;
+
+  std::array<bool, control::kFingertips> have_frame_{};
+  std::array<std::int64_t, control::kFingertips> last_whole_ns_{};
+  wire::ArmStateData arm_state_;
+  bool have_arm_ = false;
+  std::int64_t last_arm_ns_ = 0;
+  bool arm_silent_reported_ = false;
+  bool started_ = false;
+  bool waiting_reported_ = false;
+  std::int64_t start_ns_ = 0;
+  std::int64_t last_sent_ns_ = 0;
+  std::int64_t last_update_ns_ = 0;
+  std::uint64_t command_sequence_ = 0;
+  bool stale_ = false;
+  HandCounters counters_;
+};
+
+}  // namespace tactile::hand

@@ -1,0 +1,421 @@
+// hand_node as a real process between a test publisher of TactileFrames and a test arm
+// controller, over real ZeroMQ sockets: the commands and events of scripted sequences.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <set>
+
+#include "process.hpp"
+#include "synthetic.hpp"
+#include "tactile/config/calibration_file.hpp"
+#include "tactile/wire/arm.hpp"
+#include "tactile/wire/envelope.hpp"
+#include "tactile/wire/sockets.hpp"
+#include "tactile/wire/tactile_frame.hpp"
+
+namespace tactile {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::Process;
+using testing::TempDir;
+
+const wire::FingertipIds kIds{"left", "right"};
+
+std::span<const std::uint8_t> bytes(const std::string& s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
+
+Calibration fingertip_calibration(const std::string& id) {
+  testing::SceneOptions o;
+  o.width = 160;
+  o.height = 120;
+  Calibration cal = testing::grid_calibration(o, 5, 1, 30, 12);
+  cal.sensor_id = id;
+  const double s = 0.5;
+  const double c = std::sqrt(3.0) / 2.0;
+  const Vec3 normals[] = {{0, 0, 1}, {0, -s, c}, {0, s, c}, {-s, 0, c}, {s, 0, c}};
+  for (std::size_t i = 0; i < cal.elements.size(); ++i)
+    cal.elements[i].normal = normals[i];
+  return cal;
+}
+
+// The arm, the two fingertips and the cap, reduced to what hand_node sees: segments that end
+// after a few frames, fingertips whose indentation gives a normal force, slips a script injects.
+class SimWorld {
+ public:
+  explicit SimWorld(std::array<Calibration, 2> cals) : cals_(std::move(cals)) {
+    for (auto& g : gap_mm_)
+      g = 2.0;
+  }
+
+  void apply(const control::Command& c) {
+    commands_.push_back(c.kind);
+    switch (c.kind) {
+      case control::CommandKind::kMoveTo:
+        segment_ = c.move_to.name;
+        segment_id_ = c.move_to.segment_id;
+        segment_frames_ = 0;
+        ++segments_[segment_];
+        wrist_ = c.move_to.target;  // reached after kSegmentFrames (done flag below)
+        if (!c.move_to.keep_finger_velocities) velocity_ = {};
+        holding_ = false;
+        break;
+      case control::CommandKind::kFingerVelocities:
+        velocity_ = c.finger_velocities.velocity_mps;
+        holding_ = false;
+        break;
+      case control::CommandKind::kHold:
+        velocity_ = {};
+        holding_ = true;
+        break;
+      case control::CommandKind::kOpen:
+        velocity_ = {};
+        for (auto& g : gap_mm_)
+          g = std::max(g, 0.0) + c.open.distance_m * 1000;
+        break;
+      case control::CommandKind::kStop:
+        velocity_ = {};
+        stopped_ = true;
+        break;
+      case control::CommandKind::kNone:
+        break;
+    }
+  }
+
+  // One frame period.
+  void step(double dt) {
+    ++segment_frames_;
+    for (std::size_t t = 0; t < 2; ++t)
+      gap_mm_[t] -= velocity_[t].z * dt * 1000;
+  }
+
+  double pole_force(std::size_t t) const { return std::max(0.0, -gap_mm_[t]) * 3.0; }
+
+  void fill_readings(std::size_t t, std::vector<ElementReading>& out,
+                     const std::array<double, 2>& slip) const {
+    const Calibration& cal = cals_[t];
+    out.assign(cal.elements.size(), ElementReading{});
+    const double share[] = {1.0, 0.3, 0.35, 0.25, 0.25};
+    for (std::size_t e = 0; e < out.size(); ++e) {
+      ElementReading& r = out[e];
+      r.id = cal.elements[e].id;
+      const double fz = pole_force(t) * share[e];
+      if (fz < 0.02) continue;
+      r.contact = true;
+      r.has_displacement = was_contact_[t];
+      r.fz = fz;
+      r.G = cal.normal_curve.inverse(fz);
+      r.x_px = cal.elements[e].zero_px.x;
+      r.y_px = cal.elements[e].zero_px.y;
+      if (e == 0 && r.has_displacement) {
+        r.dx_mm = slip[0];
+        r.dy_mm = slip[1];
+      }
+    }
+  }
+
+  void note_contact() {
+    for (std::size_t t = 0; t < 2; ++t)
+      was_contact_[t] = pole_force(t) * 0.25 >= 0.02;
+  }
+
+  wire::ArmStateData state(std::uint64_t last_command) const {
+    wire::ArmStateData s;
+    s.wrist = wrist_;
+    s.active_segment_id = segment_id_;
+    // A turn takes longer than the other (short, simulated) segments: long enough for Ns frames.
+    s.segment_done = segment_frames_ >= (segment_ == "TURN" ? 3 * kSegmentFrames : kSegmentFrames);
+    s.holding = holding_ || stopped_;
+    s.last_command_sequence = last_command;
+    return s;
+  }
+
+  static constexpr int kSegmentFrames = 5;
+  const std::string& segment() const { return segment_; }
+  int segment_frames() const { return segment_frames_; }
+  int segments_named(const std::string& n) const {
+    auto it = segments_.find(n);
+    return it == segments_.end() ? 0 : it->second;
+  }
+  bool stopped() const { return stopped_; }
+  const std::vector<control::CommandKind>& commands() const { return commands_; }
+  bool squeezing() const { return velocity_[0].z > 0 || velocity_[1].z > 0; }
+
+ private:
+  std::array<Calibration, 2> cals_;
+  std::array<double, 2> gap_mm_{};
+  std::array<Vec3, 2> velocity_{};
+  std::array<bool, 2> was_contact_{};
+  control::WristPose wrist_{{0.35, -0.10, 0.25}, 0};
+  std::string segment_;
+  std::uint32_t segment_id_ = 0;
+  int segment_frames_ = 0;
+  std::map<std::string, int> segments_;
+  bool holding_ = false;
+  bool stopped_ = false;
+  std::vector<control::CommandKind> commands_;
+};
+
+struct RunResult {
+  std::vector<v1::EventKind> events;
+  std::vector<std::uint32_t> event_cycles;
+  std::vector<control::CommandKind> commands;
+  std::uint64_t commands_naming_both_sensors = 0;
+  std::uint64_t commands_naming_unknown_frames = 0;
+  std::uint64_t heartbeats = 0;
+  testing::ProcessResult process;
+};
+
+// Runs hand_node against the simulated world. `script(world, frame)` returns, per fingertip, the
+// slip (dx, dy in mm) of element 0 in this frame, or tells the publisher to pause that fingertip.
+struct Injection {
+  std::array<std::array<double, 2>, 2> slip{};
+  std::array<bool, 2> publish{true, true};
+};
+using Script = std::function<Injection(const SimWorld&, int frame)>;
+
+class HandNodeRun {
+ public:
+  explicit HandNodeRun(std::string controller_yaml = "") {
+    for (std::size_t t = 0; t < 2; ++t) {
+      cals_[t] = fingertip_calibration(kIds[t]);
+      config::save_calibration(dir_ / (kIds[t] + ".yaml"), cals_[t]);
+    }
+    std::ofstream(dir_ / "hand.yaml") << "format: tactile-hand/1\n"
+                                         "fingertips:\n"
+                                         "  - {sensor_id: left, calibration: left.yaml}\n"
+                                         "  - {sensor_id: right, calibration: right.yaml}\n"
+                                         "heartbeat_period_s: 0.05\n"
+                                         "controller:\n"
+                                         "  stale_after_s: 0.03\n"
+                                      << controller_yaml;
+  }
+
+  RunResult run(const Script& script, std::chrono::milliseconds limit,
+                int sigterm_after_commands = -1) {
+    zmq::context_t ctx;
+    wire::Router arm(ctx, "tcp://127.0.0.1:*");
+    wire::Publisher sensors(ctx, "tcp://127.0.0.1:*");
+    const std::string events_endpoint = "ipc://" + (dir_ / "events").string();
+    Process hand({TACTILE_HAND_NODE_PATH, "--config", (dir_ / "hand.yaml").string(), "--subscribe",
+                  sensors.endpoint(), "--arm", arm.endpoint(), "--events", events_endpoint});
+    wire::Subscriber events(ctx, {events_endpoint}, {"event"});
+
+    SimWorld world(cals_);
+    RunResult r;
+    std::string peer;
+    std::vector<std::uint8_t> payload;
+    v1::Envelope env;
+    wire::ReceivedCommand cmd;
+    std::string out;
+    std::array<std::vector<ElementReading>, 2> readings;
+    std::array<std::uint64_t, 2> sequence{};
+    std::set<std::pair<std::string, std::uint64_t>> published;  // (sensor, sequence)
+    std::uint64_t last_command = 0;
+    wire::TopicMessage ev;
+    const auto deadline = std::chrono::steady_clock::now() + limit;
+    int frame = 0;
+    bool signalled = false;
+    const double dt = 0.01;
+    while (std::chrono::steady_clock::now() < deadline && hand.running()) {
+      // The frame period paces the simulation; commands are taken as they come.
+      const auto frame_end = std::chrono::steady_clock::now() + 10ms;
+      while (arm.receive(peer, payload,
+                         std::chrono::duration_cast<std::chrono::milliseconds>(
+                             std::max(frame_end - std::chrono::steady_clock::now(),
+                                      std::chrono::steady_clock::duration::zero())))) {
+        if (wire::decode(payload, env) != wire::DecodeStatus::kOk) continue;
+        if (env.has_heartbeat()) ++r.heartbeats;
+        if (!env.has_arm_command()) continue;
+        if (wire::read_arm_command(env.arm_command(), kIds, cmd) != wire::DecodeStatus::kOk)
+          continue;
+        last_command = cmd.sequence;
+        world.apply(cmd.command);
+        r.commands.push_back(cmd.command.kind);
+        std::set<int> tips;
+        for (std::size_t i = 0; i < cmd.answers.count; ++i) {
+          const auto& a = cmd.answers.refs[i];
+          if (a.fingertip < 0 ||
+              !published.count({kIds[static_cast<std::size_t>(a.fingertip)], a.sequence})) {
+            ++r.commands_naming_unknown_frames;
+          }
+          tips.insert(a.fingertip);
+        }
+        if (tips.size() == 2) ++r.commands_naming_both_sensors;
+      }
+      while (events.receive(ev, 0ms)) {
+        if (wire::decode(ev.payload, env) == wire::DecodeStatus::kOk && env.has_event()) {
+          r.events.push_back(env.event().kind());
+          r.event_cycles.push_back(env.event().cycle());
+        }
+      }
+      if (!signalled && sigterm_after_commands >= 0 &&
+          static_cast<int>(r.commands.size()) > sigterm_after_commands) {
+        hand.signal(SIGTERM);
+        signalled = true;
+      }
+      world.step(dt);
+      const Injection inj = script(world, frame++);
+      for (std::size_t t = 0; t < 2; ++t) {
+        if (!inj.publish[t]) continue;
+        world.fill_readings(t, readings[t], inj.slip[t]);
+        wire::FrameHeader h;
+        h.sequence = sequence[t]++;
+        h.camera_frame_id = h.sequence + 1;
+        h.camera_timestamp_ns = 1'000'000'000 + static_cast<std::int64_t>(frame) * 10'000'000;
+        h.status = v1::FRAME_STATUS_COMPLETE;
+        h.nominal_period_ns = 10'000'000;
+        wire::fill_tactile_frame(kIds[t], h, readings[t], cals_[t].mm_per_px,
+                                 *env.mutable_tactile_frame());
+        wire::encode(env, out);
+        sensors.send("frame/" + kIds[t], bytes(out));
+        published.insert({kIds[t], h.sequence});
+      }
+      world.note_contact();
+      if (!peer.empty()) {
+        wire::fill_arm_state(world.state(last_command), kIds, *env.mutable_arm_state());
+        wire::encode(env, out);
+        arm.send(peer, bytes(out));
+      }
+    }
+    r.process = hand.wait(5s);
+    // Late events and commands (Stop on the way out).
+    while (events.receive(ev, 50ms)) {
+      if (wire::decode(ev.payload, env) == wire::DecodeStatus::kOk && env.has_event()) {
+        r.events.push_back(env.event().kind());
+        r.event_cycles.push_back(env.event().cycle());
+      }
+    }
+    while (arm.receive(peer, payload, 50ms)) {
+      if (wire::decode(payload, env) == wire::DecodeStatus::kOk && env.has_arm_command() &&
+          wire::read_arm_command(env.arm_command(), kIds, cmd) == wire::DecodeStatus::kOk) {
+        r.commands.push_back(cmd.command.kind);
+      }
+    }
+    return r;
+  }
+
+ private:
+  TempDir dir_;
+  std::array<Calibration, 2> cals_;
+};
+
+std::vector<v1::EventKind> without(std::vector<v1::EventKind> v,
+                                   std::initializer_list<v1::EventKind> drop) {
+  std::erase_if(
+      v, [&](v1::EventKind k) { return std::find(drop.begin(), drop.end(), k) != drop.end(); });
+  return v;
+}
+
+// The paper's experiment as hand_node sees it: the cap's weight slips on lift (positive), arm
+// vibration slips in transport, the bottle pushes back on lowering (negative), and the cap
+// slips in the second twist cycle.
+Injection paper_story(const SimWorld& w, int) {
+  Injection inj;
+  const std::string& s = w.segment();
+  const int f = w.segment_frames();
+  if (s == "MOVE3" && f == 3) inj.slip[0] = {0.0, 0.010};   // weight: along gravity
+  if (s == "MOVE4" && f == 3) inj.slip[1] = {0.008, 0.0};   // vibration
+  if (s == "MOVE5" && f == 3) inj.slip[0] = {0.0, -0.010};  // the bottle: against gravity
+  if (s == "TURN" && w.segments_named("TURN") == 2 && f >= 2) inj.slip[0] = {0.010, 0.0};
+  return inj;
+}
+
+TEST(HandNode, RunsThePapersTaskAndEndsDone) {
+  HandNodeRun run;
+  const RunResult r = run.run(paper_story, 40s);
+  ASSERT_FALSE(r.process.timed_out) << r.process.err;
+  EXPECT_EQ(r.process.exit_code, 0) << r.process.err;
+  const auto seq = without(r.events, {v1::EVENT_KIND_PHASE, v1::EVENT_KIND_TOUCH,
+                                      v1::EVENT_KIND_RECOMPRESS, v1::EVENT_KIND_TWIST_CYCLE});
+  const std::vector<v1::EventKind> want{
+      v1::EVENT_KIND_GRASPING_ENDED, v1::EVENT_KIND_GRASP_CLASSIFIED,
+      v1::EVENT_KIND_RELEASE_CLASSIFIED, v1::EVENT_KIND_CAP_TIGHT, v1::EVENT_KIND_DONE};
+  EXPECT_EQ(seq, want) << r.process.err;
+  // Re-compression answered the transport vibration.
+  EXPECT_NE(std::find(r.events.begin(), r.events.end(), v1::EVENT_KIND_RECOMPRESS), r.events.end());
+  // Tight in cycle 2, where the slips were.
+  for (std::size_t i = 0; i < r.events.size(); ++i) {
+    if (r.events[i] == v1::EVENT_KIND_CAP_TIGHT) {
+      EXPECT_EQ(r.event_cycles[i], 2U);
+    }
+  }
+  // Every command names the frames it answers: frames this test published, of both sensors.
+  ASSERT_GT(r.commands.size(), 10U);
+  EXPECT_EQ(r.commands_naming_unknown_frames, 0U);
+  EXPECT_EQ(r.commands_naming_both_sensors, r.commands.size() - 0);
+  EXPECT_EQ(r.commands.back(), control::CommandKind::kStop);
+  EXPECT_GT(r.heartbeats, 0U);
+}
+
+TEST(HandNode, HoldsOnStaleDataAndResumes) {
+  HandNodeRun run;
+  int paused_at = -1;
+  std::size_t hold_index = 0;
+  bool held = false;
+  bool moved_while_stale = false;
+  const RunResult r = run.run(
+      [&](const SimWorld& w, int frame) {
+        Injection inj;
+        // Pause the right fingertip's frames for 20 periods during transport.
+        if (w.segment() == "MOVE4" && paused_at < 0) paused_at = frame;
+        const bool paused = paused_at >= 0 && frame < paused_at + 20;
+        if (paused) inj.publish[1] = false;
+        const auto& c = w.commands();
+        if (paused && !held && !c.empty() && c.back() == control::CommandKind::kHold) {
+          held = true;
+          hold_index = c.size();
+        }
+        // While the data is stale nothing but Hold may reach the arm: no squeeze, no motion.
+        if (paused && held) {
+          for (std::size_t i = hold_index; i < c.size(); ++i) {
+            moved_while_stale = moved_while_stale || c[i] != control::CommandKind::kHold;
+          }
+        }
+        return inj;
+      },
+      40s, -1);
+  EXPECT_FALSE(r.process.timed_out);
+  EXPECT_TRUE(held) << r.process.err;
+  EXPECT_FALSE(moved_while_stale) << r.process.err;
+  const auto stale = std::find(r.events.begin(), r.events.end(), v1::EVENT_KIND_STALE_HOLD);
+  ASSERT_NE(stale, r.events.end()) << r.process.err;
+  EXPECT_NE(std::find(stale, r.events.end(), v1::EVENT_KIND_RESUMED), r.events.end())
+      << r.process.err;
+  // The task went on after resuming: lowering without a bottle to meet ends it aborted (exit 3).
+  EXPECT_EQ(r.events.back(), v1::EVENT_KIND_ABORTED);
+  EXPECT_EQ(r.process.exit_code, 3);
+}
+
+TEST(HandNode, SendsStopOnSigterm) {
+  HandNodeRun run;
+  const RunResult r = run.run([](const SimWorld&, int) { return Injection{}; }, 20s, 3);
+  ASSERT_FALSE(r.process.timed_out);
+  EXPECT_EQ(r.process.exit_code, 0) << r.process.err;
+  ASSERT_FALSE(r.commands.empty());
+  EXPECT_EQ(r.commands.back(), control::CommandKind::kStop);
+}
+
+TEST(HandNode, BadConfigurationIsOneClearLine) {
+  TempDir dir;
+  std::ofstream(dir / "hand.yaml") << "format: tactile-hand/1\nfingertips: []\n";
+  const auto r = testing::run({TACTILE_HAND_NODE_PATH, "--config", (dir / "hand.yaml").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("hand.yaml"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("fingertips"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  const auto help = testing::run({TACTILE_HAND_NODE_PATH, "--help"});
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("--subscribe"), std::string::npos);
+  EXPECT_NE(help.out.find("--arm"), std::string::npos);
+  EXPECT_EQ(testing::run({TACTILE_HAND_NODE_PATH, "--bogus"}).exit_code, 2);
+}
+
+}  // namespace
+}  // namespace tactile
