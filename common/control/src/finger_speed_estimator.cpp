@@ -95,7 +95,7 @@ FingerSpeedOutput FingerSpeedEstimator::update(
       // normal; the re-compressive velocity adds to the current one.
       const Vec3 current = before == FingerAction::kRecompress ? velocity_[f] : kZero;
       const Vec3 n = element_normal(inputs[f], ff.max_fz_index);
-      v = bound_velocity(current + recompress_gain_ * n, max_speed_);
+      v = current + recompress_gain_ * n;  // bounded below, with every other velocity
       action = FingerAction::kRecompress;
       recompress_until_[f] = now_s + recompress_duration_;
       out.recompress_started[f] = before != FingerAction::kRecompress;
