@@ -38,11 +38,34 @@ guint to_microseconds(Duration d) {
   return static_cast<guint>(std::chrono::duration_cast<std::chrono::microseconds>(d).count());
 }
 
-// True when a GigE Vision device at `address` answers a GVCP read of its version register
-// (bootstrap register 0) within `tries` x `per_try`. Aravis's own control requests wait 2.5 s
-// before giving up, and tearing down the objects of a camera that is gone makes several of
-// them: reopen() asks this first and leaves everything as it is while the camera is silent.
-bool gvcp_answers(const std::string& address, int per_try_ms, int tries) noexcept {
+FrameStatus map_buffer_status(ArvBufferStatus status) {
+  switch (status) {
+    case ARV_BUFFER_STATUS_SUCCESS:
+      return FrameStatus::kComplete;
+    case ARV_BUFFER_STATUS_MISSING_PACKETS:
+      return FrameStatus::kMissingPackets;
+    case ARV_BUFFER_STATUS_SIZE_MISMATCH:
+      return FrameStatus::kSizeMismatch;
+    case ARV_BUFFER_STATUS_TIMEOUT:
+      return FrameStatus::kTimeout;
+    case ARV_BUFFER_STATUS_ABORTED:
+      return FrameStatus::kAborted;
+    case ARV_BUFFER_STATUS_UNKNOWN:
+    case ARV_BUFFER_STATUS_CLEARED:
+    case ARV_BUFFER_STATUS_WRONG_PACKET_ID:
+    case ARV_BUFFER_STATUS_FILLING:
+    default:
+      return FrameStatus::kCameraError;
+  }
+}
+
+}  // namespace
+
+bool gvcp_device_answers(const std::string& address, Duration timeout) noexcept {
+  // Three tries share the time: a lost datagram is not a silent camera.
+  const int tries = 3;
+  const auto per_try_ms = std::max<std::int64_t>(
+      1, std::chrono::duration_cast<std::chrono::milliseconds>(timeout).count() / tries);
   sockaddr_in target{};
   target.sin_family = AF_INET;
   target.sin_port = htons(3956);
@@ -89,29 +112,6 @@ bool gvcp_answers(const std::string& address, int per_try_ms, int tries) noexcep
   ::close(fd);
   return answered;
 }
-
-FrameStatus map_buffer_status(ArvBufferStatus status) {
-  switch (status) {
-    case ARV_BUFFER_STATUS_SUCCESS:
-      return FrameStatus::kComplete;
-    case ARV_BUFFER_STATUS_MISSING_PACKETS:
-      return FrameStatus::kMissingPackets;
-    case ARV_BUFFER_STATUS_SIZE_MISMATCH:
-      return FrameStatus::kSizeMismatch;
-    case ARV_BUFFER_STATUS_TIMEOUT:
-      return FrameStatus::kTimeout;
-    case ARV_BUFFER_STATUS_ABORTED:
-      return FrameStatus::kAborted;
-    case ARV_BUFFER_STATUS_UNKNOWN:
-    case ARV_BUFFER_STATUS_CLEARED:
-    case ARV_BUFFER_STATUS_WRONG_PACKET_ID:
-    case ARV_BUFFER_STATUS_FILLING:
-    default:
-      return FrameStatus::kCameraError;
-  }
-}
-
-}  // namespace
 
 void AravisCameraOptions::validate() const {
   auto bad = [](std::string_view option, const auto& value, std::string_view rule) {
@@ -536,7 +536,8 @@ void AravisCamera::stop() noexcept {
 }
 
 bool AravisCamera::reopen() noexcept {
-  if (is_ipv4(impl_->options.camera) && !gvcp_answers(impl_->options.camera, 100, 3)) {
+  if (is_ipv4(impl_->options.camera) &&
+      !gvcp_device_answers(impl_->options.camera, std::chrono::milliseconds(300))) {
     impl_->last_error = impl_->where() + ": no answer over GVCP (camera off or unreachable)";
     return false;
   }

@@ -100,5 +100,13 @@ TEST(Allocation, PreloadedReplayCameraAllocatesNothing) {
   EXPECT_EQ(complete, 30);
 }
 
+TEST(Allocation, CounterSeesAllocations) {
+  // The counter itself works: otherwise the tests above prove nothing.
+  tactile::testing::AllocationScope scope;
+  auto* text = new std::string(100, 'x');
+  delete text;
+  EXPECT_GE(scope.count(), 1U);
+}
+
 }  // namespace
 }  // namespace tactile::camera

@@ -49,6 +49,8 @@ class AravisCamera final : public Camera {
   void open() override;
   void start() override;
   void stop() noexcept override;
+  // For an address: returns false at once (300 ms) while the camera does not answer GVCP,
+  // keeping the old objects; otherwise tears down, opens and starts again.
   bool reopen() noexcept override;
   const std::string& last_error() const noexcept override;
 
@@ -69,5 +71,12 @@ class AravisCamera final : public Camera {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// True when a GigE Vision device at `ipv4_address` answers a GVCP register read within
+// `timeout` (three tries). Cheap: use it to wait for a camera to come up. Aravis's own control
+// requests take 2.5 s to give up, and tearing down the objects of a camera that is gone makes
+// several of them, so AravisCamera::reopen() asks this first and changes nothing while the
+// camera is silent.
+bool gvcp_device_answers(const std::string& ipv4_address, Duration timeout) noexcept;
 
 }  // namespace tactile::camera
