@@ -1,0 +1,130 @@
+// sensor_node: grabs frames from the tactile sensors' cameras through Aravis, measures every
+// sensing element and publishes TactileFrames over ZeroMQ.
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <cstdio>
+#include <thread>
+
+#include "src/pipeline.hpp"
+#include "src/sensor_config.hpp"
+#include "tactile/config/calibration_file.hpp"
+#include "tactile/util/log.hpp"
+#include "tactile/util/stop.hpp"
+
+namespace {
+
+using tactile::sensor::CameraConfig;
+using tactile::sensor::SensorConfig;
+
+int run(int argc, char** argv) {
+  std::string config_path;
+  std::string camera;
+  std::string calibration;
+  std::string reference;
+  std::string publish;
+  std::string log_level = "info";
+  double fps = 0;
+  CLI::App app{
+      "sensor_node: the sensor PC of the tactile slippage control system. Grabs GigE Vision "
+      "frames through Aravis from the cameras inside the optical three-axis tactile sensors, "
+      "measures each sensing element (G, centroid, displacement, tri-axial force) and "
+      "publishes TactileFrames over ZeroMQ."};
+  app.add_option("--config", config_path, "configuration file (tactile-sensor/1 YAML)");
+  app.add_option("--camera", camera,
+                 "one-camera case: IPv4 address or Aravis device id of the camera");
+  app.add_option("--calibration", calibration, "one-camera case: calibration file of its sensor");
+  app.add_option("--reference", reference,
+                 "one-camera case: use this no-load frame (PGM) instead of capturing one");
+  app.add_option("--publish", publish, "PUB endpoint (default tcp://*:5555 or the file's)");
+  app.add_option("--fps", fps, "one-camera case: frame rate (default 100 or the file's)");
+  app.add_option("--log-level", log_level, "debug, info, warn or error")->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "sensor_node: %s (try --help)\n", e.what());
+    return 2;
+  }
+  try {
+    tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
+    std::vector<std::string> warnings;
+    SensorConfig cfg = tactile::sensor::default_sensor_config();
+    if (!config_path.empty()) {
+      cfg = tactile::sensor::load_sensor_config(config_path, &warnings);
+    } else if (camera.empty() || calibration.empty()) {
+      std::fprintf(stderr,
+                   "sensor_node: give --config FILE, or --camera and --calibration (try --help)\n");
+      return 2;
+    }
+    const bool one_camera =
+        !camera.empty() || !calibration.empty() || !reference.empty() || fps > 0;
+    if (one_camera) {
+      if (cfg.cameras.size() > 1) {
+        std::fprintf(stderr,
+                     "sensor_node: --camera, --calibration, --reference and --fps need a "
+                     "one-camera configuration\n");
+        return 2;
+      }
+      if (cfg.cameras.empty()) cfg.cameras.emplace_back();
+      CameraConfig& c = cfg.cameras.front();
+      if (!calibration.empty()) {
+        c.calibration_path = calibration;
+        c.calibration = tactile::config::load_calibration(calibration, &warnings);
+        c.sensor_id = c.calibration.sensor_id;
+      }
+      if (!camera.empty()) c.camera.camera = camera;
+      if (!reference.empty()) c.reference = reference;
+      if (fps > 0) c.camera.frame_rate_hz = fps;
+      if (c.camera.camera.empty()) throw std::invalid_argument("no camera given (--camera)");
+      tactile::sensor::finish_camera_config(c);
+    }
+    if (!publish.empty()) cfg.publish = publish;
+    for (const auto& w : warnings)
+      tactile::util::log_warn("{}", w);
+
+    tactile::util::install_stop_handlers();
+    zmq::context_t ctx;
+    tactile::sensor::SharedPublisher pub(ctx, cfg.publish);
+    tactile::util::log_info("publishing on {}", pub.endpoint());
+    std::vector<std::unique_ptr<tactile::sensor::Pipeline>> pipelines;
+    for (const CameraConfig& c : cfg.cameras) {
+      pipelines.push_back(std::make_unique<tactile::sensor::Pipeline>(
+          c, cfg.measurement, cfg.stats_period_s,
+          std::make_unique<tactile::camera::AravisCamera>(c.camera), pub));
+    }
+    std::atomic<bool> stop{false};
+    std::vector<std::thread> threads;
+    for (auto& p : pipelines)
+      threads.emplace_back([&p, &stop] { p->run(stop); });
+    // The threads end on their own only after a fatal error; a signal ends them all.
+    while (!tactile::util::stop_requested()) {
+      bool fatal = false;
+      for (const auto& p : pipelines)
+        fatal = fatal || !p->fatal_error().empty();
+      if (fatal) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    stop = true;
+    for (auto& t : threads)
+      t.join();
+    int code = 0;
+    for (const auto& p : pipelines) {
+      if (!p->fatal_error().empty()) code = 1;
+      tactile::util::log_info(
+          "published {} frames ({} measured, {} not measured), camera restarts {}",
+          p->counters().published.load(), p->counters().complete.load(),
+          p->counters().not_measured.load(), p->counters().camera_restarts.load());
+    }
+    return code;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "sensor_node: %s\n", e.what());
+    return 1;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  tactile::util::set_program_name("sensor_node");
+  return run(argc, argv);
+}

@@ -1,0 +1,228 @@
+#include "pipeline.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <thread>
+
+#include "tactile/util/clock.hpp"
+#include "tactile/util/log.hpp"
+#include "tactile/util/pgm.hpp"
+#include "tactile/wire/envelope.hpp"
+
+namespace tactile::sensor {
+namespace {
+
+std::span<const std::uint8_t> bytes_of(const std::string& s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
+
+v1::FrameStatus to_wire(camera::FrameStatus s) {
+  // The camera seam numbers its statuses as the wire does (a camera test holds them equal).
+  return static_cast<v1::FrameStatus>(static_cast<int>(s));
+}
+
+}  // namespace
+
+std::pair<double, double> IntervalTimes::take() noexcept {
+  double median = 0;
+  if (n_ > 0) {
+    std::nth_element(values_.begin(), values_.begin() + static_cast<std::ptrdiff_t>(n_ / 2),
+                     values_.begin() + static_cast<std::ptrdiff_t>(n_));
+    median = values_[n_ / 2];
+  }
+  const std::pair<double, double> r{median, max_};
+  n_ = 0;
+  max_ = 0;
+  return r;
+}
+
+Pipeline::Pipeline(CameraConfig cfg, const ExtractorOptions& measurement, double stats_period_s,
+                   std::unique_ptr<camera::Camera> cam, SharedPublisher& pub)
+    : cfg_(std::move(cfg)),
+      extractor_(cfg_.calibration, measurement),
+      cam_(std::move(cam)),
+      pub_(pub),
+      stats_period_s_(stats_period_s),
+      topic_("frame/" + cfg_.sensor_id),
+      stats_topic_("stats/" + cfg_.sensor_id) {}
+
+void Pipeline::wait(double seconds, const std::atomic<bool>& stop) const {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (!stop && std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+}
+
+bool Pipeline::connect(const std::atomic<bool>& stop) {
+  double backoff = cfg_.retry_initial_s;
+  bool first = true;
+  while (!stop) {
+    bool ok = false;
+    std::string why;
+    if (first) {
+      try {
+        cam_->start();
+        ok = true;
+      } catch (const std::exception& e) {
+        why = e.what();
+      }
+    } else {
+      ok = cam_->reopen();
+      why = cam_->last_error();
+      if (ok) ++counters_.camera_restarts;
+    }
+    if (ok) {
+      util::log_info("{}: camera {}", cfg_.sensor_id, cam_->describe());
+      return true;
+    }
+    util::log_warn("{}: camera {} unavailable ({}); retrying in {:.1f} s", cfg_.sensor_id,
+                   cfg_.camera.camera, why, backoff);
+    first = false;
+    wait(backoff, stop);
+    backoff = std::min(backoff * 2, cfg_.retry_max_s);
+  }
+  return false;
+}
+
+bool Pipeline::load_reference() {
+  std::filesystem::path file;
+  if (!cfg_.reference.empty()) {
+    file = cfg_.reference;
+  } else if (!cfg_.reference_cache.empty() && std::filesystem::exists(cfg_.reference_cache)) {
+    file = cfg_.reference_cache;
+  } else {
+    return false;
+  }
+  const Image img = util::read_pgm(file);  // throws with the file's name
+  extractor_.begin_reference();
+  const auto r = extractor_.add_reference_frame(img.view());
+  const auto done = r.status == ReferenceStatus::kCollecting ? extractor_.finish_reference() : r;
+  if (done.status != ReferenceStatus::kComplete) {
+    throw std::runtime_error(file.string() + ": reference " + to_string(done.status) +
+                             " (element " + std::to_string(done.element_id) + ")");
+  }
+  util::log_info("{}: reference loaded from {}", cfg_.sensor_id, file.string());
+  return true;
+}
+
+void Pipeline::publish(const camera::Frame& frame, v1::FrameStatus status, double measure_us) {
+  wire::FrameHeader h;
+  h.sequence = sequence_++;
+  h.camera_frame_id = frame.camera_frame_id;
+  h.camera_timestamp_ns = frame.camera_timestamp_ns;
+  h.receive_timestamp_ns = frame.receive_timestamp_ns;
+  h.status = status;
+  h.nominal_period_ns = cam_->nominal_period().count();
+  h.frames_skipped =
+      static_cast<std::uint32_t>(std::min<std::uint64_t>(frame.frames_lost, UINT32_MAX));
+  h.measure_time_us = measure_us;
+  h.publish_timestamp_ns = util::realtime_ns();
+  wire::fill_tactile_frame(cfg_.sensor_id, h, extractor_.readings(), cfg_.calibration.mm_per_px,
+                           *env_.mutable_tactile_frame());
+  wire::encode(env_, bytes_);
+  pub_.send(topic_, bytes_of(bytes_));
+  ++counters_.published;
+  if (frame.receive_timestamp_ns > 0) {
+    publish_times_.add(static_cast<double>(util::realtime_ns() - frame.receive_timestamp_ns) *
+                       1e-3);
+  }
+}
+
+void Pipeline::publish_stats() {
+  const camera::CameraCounters c = cam_->counters();
+  v1::SensorStats& s = *stats_env_.mutable_sensor_stats();
+  s.set_sensor_id(cfg_.sensor_id);
+  s.set_time_ns(util::realtime_ns());
+  s.set_frames(c.frames);
+  s.set_frames_complete(c.completed);
+  s.set_frames_incomplete(c.incomplete);
+  s.set_underruns(c.underruns);
+  s.set_missing_packets(c.missing_packets);
+  const auto [m50, mmax] = measure_times_.take();
+  const auto [p50, pmax] = publish_times_.take();
+  s.set_measure_us_p50(m50);
+  s.set_measure_us_max(mmax);
+  s.set_publish_us_p50(p50);
+  s.set_publish_us_max(pmax);
+  s.set_camera_restarts(counters_.camera_restarts);
+  wire::encode(stats_env_, bytes_);
+  pub_.send(stats_topic_, bytes_of(bytes_));
+  util::log_debug(
+      "{}: frames {} complete {} incomplete {} lost {} underruns {}; measure p50 {:.1f} us max "
+      "{:.1f} us",
+      cfg_.sensor_id, c.frames, c.completed, c.incomplete, c.frames_lost, c.underruns, m50, mmax);
+}
+
+void Pipeline::run(const std::atomic<bool>& stop) noexcept {
+  try {
+    const bool have_reference = load_reference();
+    if (!connect(stop)) return;
+    if (!have_reference) {
+      extractor_.begin_reference();
+      capturing_reference_ = true;
+      util::log_info("{}: capturing the no-load reference ({} frames): do not touch the sensor",
+                     cfg_.sensor_id, extractor_.options().reference_frames);
+    }
+    const auto timeout = std::chrono::duration_cast<camera::Duration>(
+        std::chrono::duration<double>(cfg_.frame_timeout_s));
+    last_stats_ns_ = util::monotonic_ns();
+    while (!stop) {
+      const camera::Frame frame = cam_->wait_frame(timeout);
+      const std::int64_t now = util::monotonic_ns();
+      if (now - last_stats_ns_ >= static_cast<std::int64_t>(stats_period_s_ * 1e9)) {
+        publish_stats();
+        last_stats_ns_ = now;
+      }
+      if (!frame.received) {
+        if (stop) break;
+        util::log_warn("{}: no frame for {:.2f} s ({}): reopening the camera", cfg_.sensor_id,
+                       cfg_.frame_timeout_s, camera::to_string(frame.status));
+        extractor_.forget_previous();
+        if (!connect(stop)) break;
+        continue;
+      }
+      if (frame.first_after_start) extractor_.forget_previous();
+      if (frame.status != camera::FrameStatus::kComplete) {
+        ++counters_.not_measured;
+        publish(frame, to_wire(frame.status), 0);
+        continue;
+      }
+      if (capturing_reference_) {
+        const ReferenceResult r = extractor_.add_reference_frame(frame.image);
+        if (r.status == ReferenceStatus::kComplete) {
+          capturing_reference_ = false;
+          util::log_info("{}: reference captured from {} frames", cfg_.sensor_id, r.frames);
+          if (!cfg_.reference_cache.empty()) {
+            util::write_pgm(cfg_.reference_cache, extractor_.reference_image().view());
+            util::log_info("{}: reference saved to {}", cfg_.sensor_id,
+                           cfg_.reference_cache.string());
+          }
+        } else if (r.status != ReferenceStatus::kCollecting) {
+          util::log_warn("{}: reference {} (element {}, excess G {:.0f}); starting again",
+                         cfg_.sensor_id, to_string(r.status), r.element_id, r.value);
+        }
+        ++counters_.not_measured;
+        publish(frame, v1::FRAME_STATUS_NO_REFERENCE, 0);
+        continue;
+      }
+      const std::int64_t t0 = util::monotonic_ns();
+      const MeasureStatus ms =
+          extractor_.measure(frame.image, {frame.sequence, frame.camera_timestamp_ns});
+      const double us = static_cast<double>(util::monotonic_ns() - t0) * 1e-3;
+      measure_times_.add(us);
+      if (ms == MeasureStatus::kOk) {
+        ++counters_.complete;
+        publish(frame, v1::FRAME_STATUS_COMPLETE, us);
+      } else {
+        ++counters_.not_measured;
+        publish(frame, v1::FRAME_STATUS_WRONG_FORMAT, us);
+      }
+    }
+  } catch (const std::exception& e) {
+    fatal_ = cfg_.sensor_id + ": " + e.what();
+    util::log_error("{}", fatal_);
+  }
+  cam_->stop();
+}
+
+}  // namespace tactile::sensor

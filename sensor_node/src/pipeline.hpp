@@ -1,0 +1,97 @@
+#pragma once
+
+// One camera's pipeline: frames from the camera seam, the measurement core, TactileFrames out.
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "sensor_config.hpp"
+#include "tactile/camera/camera.hpp"
+#include "tactile/extractor.hpp"
+#include "tactile/v1/tactile.pb.h"
+#include "tactile/wire/sockets.hpp"
+#include "tactile/wire/tactile_frame.hpp"
+
+namespace tactile::sensor {
+
+// One PUB socket shared by every camera thread (a ZeroMQ socket must not be used by two threads
+// at once; the lock is held only for the send).
+class SharedPublisher {
+ public:
+  SharedPublisher(zmq::context_t& ctx, const std::string& endpoint) : pub_(ctx, endpoint) {}
+  void send(std::string_view topic, std::span<const std::uint8_t> payload) {
+    std::lock_guard lock(mutex_);
+    pub_.send(topic, payload);
+  }
+  std::string endpoint() const { return pub_.endpoint(); }
+
+ private:
+  std::mutex mutex_;
+  wire::Publisher pub_;
+};
+
+// Times of the last interval, fixed capacity: the per-frame path records without allocating.
+class IntervalTimes {
+ public:
+  void add(double us) noexcept {
+    if (n_ < values_.size()) values_[n_++] = us;
+    max_ = std::max(max_, us);
+  }
+  // Median and maximum of the interval, then starts a new one.
+  std::pair<double, double> take() noexcept;
+
+ private:
+  std::array<double, 8192> values_{};
+  std::size_t n_ = 0;
+  double max_ = 0;
+};
+
+struct PipelineCounters {
+  std::atomic<std::uint64_t> published{0};
+  std::atomic<std::uint64_t> complete{0};
+  std::atomic<std::uint64_t> not_measured{0};
+  std::atomic<std::uint64_t> camera_restarts{0};
+};
+
+class Pipeline {
+ public:
+  Pipeline(CameraConfig cfg, const ExtractorOptions& measurement, double stats_period_s,
+           std::unique_ptr<camera::Camera> cam, SharedPublisher& pub);
+  // Runs until `stop` is set: opens the camera (retrying with backoff), takes or loads the
+  // reference, then measures and publishes every frame. Never throws.
+  void run(const std::atomic<bool>& stop) noexcept;
+  const PipelineCounters& counters() const { return counters_; }
+  // The last error that kept the pipeline from running (for the program's exit message).
+  const std::string& fatal_error() const { return fatal_; }
+
+ private:
+  bool connect(const std::atomic<bool>& stop);
+  bool load_reference();
+  void publish(const camera::Frame& frame, v1::FrameStatus status, double measure_us);
+  void publish_stats();
+  void wait(double seconds, const std::atomic<bool>& stop) const;
+
+  CameraConfig cfg_;
+  Extractor extractor_;
+  std::unique_ptr<camera::Camera> cam_;
+  SharedPublisher& pub_;
+  double stats_period_s_;
+  bool capturing_reference_ = false;
+
+  v1::Envelope env_;
+  v1::Envelope stats_env_;  // its own: switching one envelope's body would free the frame's
+  std::string bytes_;
+  std::string topic_;
+  std::string stats_topic_;
+  std::uint64_t sequence_ = 0;
+  IntervalTimes measure_times_;
+  IntervalTimes publish_times_;
+  std::int64_t last_stats_ns_ = 0;
+  PipelineCounters counters_;
+  std::string fatal_;
+};
+
+}  // namespace tactile::sensor

@@ -1,0 +1,45 @@
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "tactile/calibration.hpp"
+#include "tactile/camera/aravis_camera.hpp"
+#include "tactile/extractor.hpp"
+
+namespace tactile::sensor {
+
+inline constexpr const char* kSensorConfigFormat = "tactile-sensor/1";
+
+struct CameraConfig {
+  std::string sensor_id;
+  std::filesystem::path calibration_path;
+  Calibration calibration;
+  camera::AravisCameraOptions camera;     // width, height and pixel format from the calibration
+  std::filesystem::path reference;        // a no-load frame to use instead of capturing one
+  std::filesystem::path reference_cache;  // a captured reference is saved here and reused
+  double frame_timeout_s = 0.5;           // no frame for this long: the camera stopped; reopen it
+  double retry_initial_s = 0.2;           // first wait before reopening, doubled up to retry_max_s
+  double retry_max_s = 5.0;
+};
+
+// sensor_node's configuration (docs/sensor_node.md).
+struct SensorConfig {
+  std::string publish = "tcp://*:5555";
+  double stats_period_s = 1.0;
+  ExtractorOptions measurement;
+  std::vector<CameraConfig> cameras;
+};
+
+SensorConfig default_sensor_config();
+
+// Loads and checks a file; throws config::ConfigError naming file, line, key and value. Paths in
+// the file are relative to its folder.
+SensorConfig load_sensor_config(const std::filesystem::path& path,
+                                std::vector<std::string>* warnings);
+
+// Fills the camera's image settings from its calibration and checks them.
+void finish_camera_config(CameraConfig& c);
+
+}  // namespace tactile::sensor

@@ -1,0 +1,160 @@
+// sensor_node as a real process against Aravis's own fake GigE Vision camera
+// (arv-fake-gv-camera-0.8) in a private network namespace: real GVCP and GVSP packets, real
+// ZeroMQ, real files.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "process.hpp"
+#include "support/child_process.hpp"
+#include "synthetic.hpp"
+#include "tactile/config/calibration_file.hpp"
+#include "tactile/util/pgm.hpp"
+#include "tactile/wire/envelope.hpp"
+#include "tactile/wire/sockets.hpp"
+
+namespace tactile {
+namespace {
+
+using namespace std::chrono_literals;
+using camera::testing::ChildProcess;
+using testing::Process;
+using testing::TempDir;
+
+struct Collected {
+  std::vector<v1::TactileFrame> frames;
+  std::uint64_t stats = 0;
+};
+
+Collected collect(wire::Subscriber& sub, std::size_t want, std::chrono::milliseconds limit) {
+  Collected c;
+  wire::TopicMessage msg;
+  v1::Envelope env;
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (c.frames.size() < want && std::chrono::steady_clock::now() < deadline) {
+    if (!sub.receive(msg, 50ms)) continue;
+    if (wire::decode(msg.payload, env) != wire::DecodeStatus::kOk) continue;
+    if (env.has_tactile_frame()) c.frames.push_back(env.tactile_frame());
+    if (env.has_sensor_stats()) ++c.stats;
+  }
+  return c;
+}
+
+class SensorNodeAgainstAravisFake : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    testing::SceneOptions o;  // 640 x 480, 8 bits
+    Calibration cal = testing::grid_calibration(o, 8, 5, 60, 14);
+    cal.sensor_id = "left";
+    config::save_calibration(dir_ / "left.yaml", cal);
+    elements_ = cal.elements.size();
+    Image zero(o.width, o.height, PixelFormat::kMono8);
+    util::write_pgm(dir_ / "zero.pgm", zero.view());
+    endpoint_ = "ipc://" + (dir_ / "frames").string();
+  }
+
+  std::vector<std::string> args(const std::string& camera) const {
+    return {TACTILE_SENSOR_NODE_PATH,
+            "--camera",
+            camera,
+            "--calibration",
+            (dir_ / "left.yaml").string(),
+            "--reference",
+            (dir_ / "zero.pgm").string(),
+            "--publish",
+            endpoint_,
+            "--fps",
+            "100"};
+  }
+
+  TempDir dir_;
+  std::size_t elements_ = 0;
+  std::string endpoint_;
+};
+
+TEST_F(SensorNodeAgainstAravisFake, PublishesOneWholeFramePerCameraFrame) {
+  ChildProcess fake({"arv-fake-gv-camera-0.8", "-i", "127.0.0.2", "-s", "TACTILE01"});
+  Process node(args("127.0.0.2"));
+  zmq::context_t ctx;
+  wire::Subscriber sub(ctx, {endpoint_}, {"frame/left", "stats/left"});
+  const Collected c = collect(sub, 150, 20s);
+  ASSERT_GE(c.frames.size(), 150U) << node.err_so_far() << fake.output();
+  for (std::size_t i = 1; i < c.frames.size(); ++i) {
+    const auto& a = c.frames[i - 1];
+    const auto& b = c.frames[i];
+    // Sequence numbers without gaps, and no camera frame lost on loopback: block ids step by
+    // one (they wrap from 65535 to 1 on GigE Vision 1.x).
+    EXPECT_EQ(b.sequence(), a.sequence() + 1);
+    EXPECT_EQ(b.camera_frame_id(), a.camera_frame_id() == 65535 ? 1 : a.camera_frame_id() + 1);
+    EXPECT_GE(b.camera_timestamp_ns(), a.camera_timestamp_ns());
+  }
+  for (const auto& f : c.frames) {
+    ASSERT_EQ(f.status(), v1::FRAME_STATUS_COMPLETE);
+    EXPECT_EQ(f.sensor_id(), "left");
+    EXPECT_EQ(f.nominal_period_ns(), 10'000'000);
+    EXPECT_GE(f.publish_timestamp_ns(), f.receive_timestamp_ns());
+    EXPECT_TRUE(std::isfinite(f.measure_time_us()));
+    ASSERT_EQ(static_cast<std::size_t>(f.elements_size()), elements_);
+    for (const auto& e : f.elements()) {
+      for (double v : {e.g(), e.x_mm(), e.y_mm(), e.dx_mm(), e.dy_mm(), e.ux_mm(), e.uy_mm(),
+                       e.fx_n(), e.fy_n(), e.fz_n()}) {
+        ASSERT_TRUE(std::isfinite(v));
+      }
+      EXPECT_GE(e.g(), 0);
+    }
+  }
+  // The fake's test pattern is bright against a black reference: elements are in contact.
+  std::size_t touching = 0;
+  for (const auto& e : c.frames.back().elements())
+    touching += e.contact() ? 1 : 0;
+  EXPECT_GT(touching, 0U);
+
+  node.signal(SIGTERM);
+  const auto r = node.wait(10s);
+  EXPECT_FALSE(r.timed_out);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+TEST_F(SensorNodeAgainstAravisFake, WaitsForAnAbsentCameraAndStopsCleanly) {
+  // Nothing answers on 127.0.0.3: sensor_node retries with backoff, says so, and stops on SIGTERM.
+  Process node(args("127.0.0.3"));
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (node.err_so_far().find("retrying") == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(20ms);
+  }
+  EXPECT_NE(node.err_so_far().find("retrying"), std::string::npos) << node.err_so_far();
+  // A camera that appears later is picked up.
+  ChildProcess fake({"arv-fake-gv-camera-0.8", "-i", "127.0.0.3", "-s", "TACTILE02"});
+  zmq::context_t ctx;
+  wire::Subscriber sub(ctx, {endpoint_}, {"frame/left"});
+  const Collected c = collect(sub, 10, 20s);
+  EXPECT_GE(c.frames.size(), 10U) << node.err_so_far();
+  node.signal(SIGTERM);
+  const auto r = node.wait(10s);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+TEST(SensorNode, BadInputIsOneClearLine) {
+  TempDir dir;
+  std::ofstream(dir / "bad.yaml") << "format: tactile-calibration/1\nsensor_id: x\n";
+  auto r = testing::run({TACTILE_SENSOR_NODE_PATH, "--camera", "127.0.0.2", "--calibration",
+                         (dir / "bad.yaml").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("bad.yaml"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("'image' is missing"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  r = testing::run({TACTILE_SENSOR_NODE_PATH});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--config"), std::string::npos) << r.err;
+  r = testing::run({TACTILE_SENSOR_NODE_PATH, "--help"});
+  EXPECT_EQ(r.exit_code, 0);
+  for (const char* opt : {"--config", "--camera", "--calibration", "--reference", "--publish"}) {
+    EXPECT_NE(r.out.find(opt), std::string::npos) << opt;
+  }
+}
+
+}  // namespace
+}  // namespace tactile
