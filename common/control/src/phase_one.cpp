@@ -66,7 +66,6 @@ void PhaseOneSequencer::enter(Phase p, const StepInput& in, SegmentIds& ids,
                               StepOutput& out) noexcept {
   phase_ = p;
   sub_ = Sub::kNone;
-  step_started_s_ = in.t;
   segment_.active = false;
   event(EventKind::kPhase, out, to_string(p));
   switch (p) {

@@ -52,7 +52,6 @@ void PhaseTwoSequencer::enter(Phase p, const StepInput& in, SegmentIds& ids,
                               StepOutput& out) noexcept {
   phase_ = p;
   sub_ = Sub::kNone;
-  step_started_s_ = in.t;
   segment_.active = false;
   event(EventKind::kPhase, out, to_string(p));
   const double sign = cfg_.tighten_clockwise ? -1.0 : 1.0;

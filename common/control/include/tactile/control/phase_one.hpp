@@ -50,7 +50,6 @@ class PhaseOneSequencer {
   Config cfg_;
   Phase phase_ = Phase::kIdle;
   Sub sub_ = Sub::kNone;
-  double step_started_s_ = 0;
   double sub_started_s_ = 0;
   ActiveSegment segment_;
   std::array<bool, kFingertips> touched_{};

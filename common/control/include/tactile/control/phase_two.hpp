@@ -53,7 +53,6 @@ class PhaseTwoSequencer {
   Config cfg_;
   Phase phase_ = Phase::kIdle;
   Sub sub_ = Sub::kNone;
-  double step_started_s_ = 0;
   double sub_started_s_ = 0;
   ActiveSegment segment_;
   WristPose reference_;
