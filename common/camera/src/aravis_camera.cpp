@@ -182,7 +182,6 @@ struct AravisCamera::Impl {
   std::uint64_t closed_underruns = 0;
   std::uint64_t closed_missing_packets = 0;
   std::uint64_t closed_failures = 0;
-  std::uint64_t without_callback = 0;
 
   static void on_stream_event(void* user_data, ArvStreamCallbackType type, ArvBuffer* buffer) {
     // Runs on the Aravis stream thread: stamp and return, never block.
@@ -446,10 +445,10 @@ struct AravisCamera::Impl {
     frame.receive_timestamp_ns = popped_ns;
     if (auto* slot = static_cast<Slot*>(const_cast<void*>(arv_buffer_get_user_data(buffer)))) {
       const std::lock_guard lock(slot_mutex);
+      // Aravis 0.8.26 queues the buffer before it calls back (and at times does not call back),
+      // so the stamp may not be there yet: the pop time, microseconds later, stands in.
       if (slot->stamped && slot->frame_id == frame_id) {
-        frame.receive_timestamp_ns = slot->done_ns;
-      } else {
-        ++without_callback;
+        frame.receive_timestamp_ns = std::min(slot->done_ns, popped_ns);
       }
       slot->stamped = false;
     }
@@ -584,10 +583,6 @@ Duration AravisCamera::nominal_period() const noexcept {
 
 std::string AravisCamera::describe() const {
   return impl_->description.empty() ? impl_->where() + " (not open)" : impl_->description;
-}
-
-std::uint64_t AravisCamera::frames_without_callback() const noexcept {
-  return impl_->without_callback;
 }
 
 const AravisCameraOptions& AravisCamera::options() const noexcept {

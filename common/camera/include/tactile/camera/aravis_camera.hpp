@@ -62,9 +62,6 @@ class AravisCamera final : public Camera {
   Duration nominal_period() const noexcept override;
   std::string describe() const override;
 
-  // Frames delivered without a BUFFER_DONE callback (Aravis 0.8.26 does that at times; they
-  // are found by draining the output queue and stamped with the time they were popped).
-  std::uint64_t frames_without_callback() const noexcept;
   const AravisCameraOptions& options() const noexcept;
 
  private:
