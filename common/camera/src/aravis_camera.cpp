@@ -394,9 +394,13 @@ struct AravisCamera::Impl {
     release();
     if (!acquiring) return;
     acquiring = false;
-    GError* error = nullptr;
-    arv_camera_stop_acquisition(camera.get(), &error);
-    if (error != nullptr) last_error = detail::take_error(error, where() + ": stop acquisition");
+    // Telling a camera that is gone to stop costs Aravis's 2.5 s control timeout: ask first.
+    if (!is_ipv4(options.camera) ||
+        gvcp_device_answers(options.camera, std::chrono::milliseconds(300))) {
+      GError* error = nullptr;
+      arv_camera_stop_acquisition(camera.get(), &error);
+      if (error != nullptr) last_error = detail::take_error(error, where() + ": stop acquisition");
+    }
     drain();
   }
 
