@@ -126,13 +126,32 @@ Renderer::Renderer(const Calibration& cal, const CameraParams& cam, const Sensor
   // Expected measured G against drawn strength, per element: every disk pixel's expected
   // thresholded increment, with the noise of frame and reference and the rounding included.
   strength_grid_.push_back(0.0);
-  for (int i = 0; i <= 120; ++i)
-    strength_grid_.push_back(scale_ * std::pow(10.0, -1.0 + 7.0 * i / 120.0));
+  for (int i = 0; i <= 80; ++i)
+    strength_grid_.push_back(scale_ * std::pow(10.0, 6.5 * i / 80.0));
   const double n_ref = std::max(1, opt_.reference_frames);
   const double ref_factor = 1.0 + 1.0 / n_ref;
+  const auto variance = [&](double bg, double s) {
+    const double sd = pixel_sigma(bg + s);
+    const double sd_ref = pixel_sigma(bg);
+    return sd * sd + (ref_factor - 1.0) * sd_ref * sd_ref + ref_factor / 12.0;
+  };
+  struct DiskPixel {
+    double r2, bg, base;
+  };
+  std::vector<DiskPixel> disk;
   g_table_.resize(cal_.elements.size());
   for (std::size_t k = 0; k < cal_.elements.size(); ++k) {
     const ElementCalibration& e = cal_.elements[k];
+    disk.clear();
+    double base_sum = 0;
+    for_each_disk_pixel(e.center_px, e.radius_px, [&](int x, int y) {
+      const double dx = x - e.center_px.x;
+      const double dy = y - e.center_px.y;
+      const double bg = background_at(x, y);
+      const double base = partial_expectation(0.0, cal_.noise_floor, std::sqrt(variance(bg, 0)));
+      disk.push_back({dx * dx + dy * dy, bg, base});
+      base_sum += base;
+    });
     auto& table = g_table_[k];
     table.reserve(strength_grid_.size());
     for (double p : strength_grid_) {
@@ -140,18 +159,13 @@ Renderer::Renderer(const Calibration& cal, const CameraParams& cam, const Sensor
       const double sigma = std::clamp(std::sqrt(p / (2.0 * std::numbers::pi * peak_ref)),
                                       opt_.spot_sigma_min_px, opt_.spot_sigma_max_px);
       const double peak = p / (2.0 * std::numbers::pi * sigma * sigma);
-      double g = 0;
-      for_each_disk_pixel(e.center_px, e.radius_px, [&](int x, int y) {
-        const double dx = x - e.center_px.x;
-        const double dy = y - e.center_px.y;
-        const double bg = background_at(x, y);
-        const double s =
-            std::min(peak * std::exp(-(dx * dx + dy * dy) / (2 * sigma * sigma)), max_level_ - bg);
-        const double sd = pixel_sigma(bg + s);
-        const double sd_ref = pixel_sigma(bg);
-        const double var = sd * sd + (ref_factor - 1.0) * sd_ref * sd_ref + ref_factor / 12.0;
-        g += partial_expectation(s, cal_.noise_floor, std::sqrt(var));
-      });
+      // Pixels the spot does not reach keep the noise's own expected weight (base).
+      double g = base_sum;
+      for (const DiskPixel& d : disk) {
+        const double s = std::min(peak * std::exp(-d.r2 / (2 * sigma * sigma)), max_level_ - d.bg);
+        if (s < 1e-4 * scale_) continue;
+        g += partial_expectation(s, cal_.noise_floor, std::sqrt(variance(d.bg, s))) - d.base;
+      }
       // Monotonic by construction; guard against rounding at the saturated end.
       if (!table.empty()) g = std::max(g, table.back());
       table.push_back(g);
@@ -262,15 +276,35 @@ void Renderer::render(std::span<const ElementLoad> loads, util::Random& rng, Ima
       drawn_[k] = true;
       ++redrawn_;
     }
-    const Box& b = boxes_[k];
-    const std::size_t w = static_cast<std::size_t>(b.x1 - b.x0 + 1);
-    const std::size_t n = w * static_cast<std::size_t>(b.y1 - b.y0 + 1);
-    std::size_t o = rng.below(kPoolSize - n);
-    std::size_t i = b.offset;
-    for (int y = b.y0; y <= b.y1; ++y) {
-      for (int x = b.x0; x <= b.x1; ++x, ++i, ++o)
-        out.set(x, y, quantise(static_cast<double>(cache_value_[i] + cache_sigma_[i] * pool_[o])));
+    if (fmt == PixelFormat::kMono8) {
+      noisy_box<std::uint8_t>(k, rng, out);
+    } else {
+      noisy_box<std::uint16_t>(k, rng, out);
     }
+  }
+}
+
+template <typename Pixel>
+void Renderer::noisy_box(std::size_t k, util::Random& rng, Image& out) const noexcept {
+  const Box& b = boxes_[k];
+  const std::size_t w = static_cast<std::size_t>(b.x1 - b.x0 + 1);
+  const std::size_t n = w * static_cast<std::size_t>(b.y1 - b.y0 + 1);
+  const float* z = pool_.data() + rng.below(kPoolSize - n);
+  const float* value = cache_value_.data() + b.offset;
+  const float* sigma = cache_sigma_.data() + b.offset;
+  const auto top = static_cast<float>(max_level_);
+  auto* base = reinterpret_cast<Pixel*>(out.bytes().data());
+  for (int y = b.y0; y <= b.y1; ++y) {
+    Pixel* row = base + static_cast<std::size_t>(y) * static_cast<std::size_t>(cam_.width) +
+                 static_cast<std::size_t>(b.x0);
+    for (std::size_t x = 0; x < w; ++x) {
+      // Round half up after clamping to the sensor's range (values are never negative here).
+      const float v = std::clamp(value[x] + sigma[x] * z[x], 0.0F, top);
+      row[x] = static_cast<Pixel>(v + 0.5F);
+    }
+    value += w;
+    sigma += w;
+    z += w;
   }
 }
 

@@ -27,9 +27,14 @@ const GroundTruth& TruthRecorder::take(World& world, std::uint64_t frame_id,
       et.ux_mm = e.contact ? e.s_mm[0] : 0.0;
       et.uy_mm = e.contact ? e.s_mm[1] : 0.0;
       et.releases = e.frame_releases;
+      et.slip_mm = e.frame_slip_mm;
       et.surface_mm = std::hypot(e.frame_surface_mm[0], e.frame_surface_mm[1]);
+      const double limit = world.params().cap.friction * e.fn_n;
+      et.load_ratio = e.contact && limit > 0 ? std::hypot(et.fx_n, et.fy_n) / limit : 0.0;
+      const bool moving = et.surface_mm > slip_threshold_mm;
       et.sliding = et.visible && was_visible &&
-                   (et.releases > 0 || (was_sliding && et.surface_mm > slip_threshold_mm));
+                   (et.slip_mm > slip_threshold_mm ||
+                    (moving && (was_sliding || et.load_ratio >= partial_slip_ratio_)));
     }
   }
   const CapState& cap = world.cap();

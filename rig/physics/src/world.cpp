@@ -180,8 +180,9 @@ void World::update_arm(double dt) noexcept {
       arm_.segment_done = true;
     }
   } else {
-    // Hold, Stop or no segment: come to rest with bounded deceleration.
-    arm_.velocity_mps = arm_.velocity_mps + clamp_norm(-1.0 * arm_.velocity_mps, a * dt);
+    // Hold, Stop or no segment: brake to rest.
+    arm_.velocity_mps =
+        arm_.velocity_mps + clamp_norm(-1.0 * arm_.velocity_mps, p_.arm.stop_decel_mps2 * dt);
     arm_.yaw_rate_rps =
         arm_.yaw_rate_rps + std::clamp(-arm_.yaw_rate_rps, -p_.arm.max_yaw_accel_rps2 * dt,
                                        p_.arm.max_yaw_accel_rps2 * dt);
@@ -189,9 +190,12 @@ void World::update_arm(double dt) noexcept {
     arm_.yaw_rad += dt * arm_.yaw_rate_rps;
   }
   // Vibration of the arm's servos: it grows while the arm moves and fades when it rests.
-  const bool moving = norm(arm_.velocity_mps) > 0.001 || std::abs(arm_.yaw_rate_rps) > 0.01;
+  // The arm's big joints shake in proportion to the speed they translate at; turning the
+  // wrist alone does not.
+  const double target =
+      std::min(1.0, norm(arm_.velocity_mps) / std::max(p_.arm.vibration_full_speed_mps, 1e-6));
   const double rise = std::max(p_.arm.vibration_rise_s, dt);
-  arm_.vibration_envelope += ((moving ? 1.0 : 0.0) - arm_.vibration_envelope) * (dt / rise);
+  arm_.vibration_envelope += (target - arm_.vibration_envelope) * (dt / rise);
   const double phase = 2.0 * kPi * p_.arm.vibration_hz * (t_ + dt);
   arm_.vibration_m = {0, 0, p_.arm.vibration_m * arm_.vibration_envelope * std::sin(phase)};
 }
@@ -317,9 +321,11 @@ void World::update_tangential(double dt) noexcept {
       // breaks loose and the spring swings through the kinetic level to 2 mu_k - mu_s (the
       // undamped stick-slip release), where the tip sticks again.
       if (std::hypot(e.ft_n[0], e.ft_n[1]) > p_.cap.friction * e.fn_n) {
+        const std::array<double, 2> before = e.s_mm;
         release_to(e, std::max(0.0, 2.0 * mu_k_ - p_.cap.friction) * e.fn_n);
         e.sliding = true;
         ++e.frame_releases;
+        e.frame_slip_mm += std::hypot(before[0] - e.s_mm[0], before[1] - e.s_mm[1]);
       }
     }
   }
@@ -474,6 +480,7 @@ void World::clear_frame_accumulators() noexcept {
   for (Fingertip& t : tips_) {
     for (Element& e : t.elements) {
       e.frame_releases = 0;
+      e.frame_slip_mm = 0;
       e.frame_surface_mm = {};
     }
   }

@@ -162,15 +162,19 @@ Scenario parse_scenario(const std::string& text, const std::string& source) {
 
   // arm (required: vibration_mm, vibration_hz)
   const Node arm = root["arm"];
-  refuse_unknown(arm, {"vibration_mm", "vibration_hz", "vibration_rise_s", "max_accel_mps2",
-                       "max_yaw_accel_rps2", "finger_accel_mps2", "finger_open_mm", "start_m",
+  refuse_unknown(arm, {"vibration_mm", "vibration_hz", "vibration_rise_s", "vibration_full_speed_mps", "max_accel_mps2", "stop_decel_mps2",
+                       "max_yaw_accel_rps2", "stop_yaw_decel_rps2", "finger_accel_mps2", "finger_open_mm", "start_m",
                        "start_yaw_deg"});
   ArmParams& ap = s.world.arm;
   ap.vibration_m = need(arm, "vibration_mm", 0.0, 5.0) / 1000.0;
   ap.vibration_hz = need(arm, "vibration_hz", 0.0, 200.0);
   ap.vibration_rise_s = want(arm, "vibration_rise_s", ap.vibration_rise_s, 0.0, 10.0);
   ap.max_accel_mps2 = want(arm, "max_accel_mps2", ap.max_accel_mps2, 0.01, 50.0);
+  ap.vibration_full_speed_mps =
+      want(arm, "vibration_full_speed_mps", ap.vibration_full_speed_mps, 0.001, 10.0);
+  ap.stop_decel_mps2 = want(arm, "stop_decel_mps2", ap.stop_decel_mps2, 0.01, 100.0);
   ap.max_yaw_accel_rps2 = want(arm, "max_yaw_accel_rps2", ap.max_yaw_accel_rps2, 0.01, 500.0);
+  ap.stop_yaw_decel_rps2 = want(arm, "stop_yaw_decel_rps2", ap.stop_yaw_decel_rps2, 0.01, 500.0);
   ap.finger_accel_mps2 = want(arm, "finger_accel_mps2", ap.finger_accel_mps2, 0.01, 100.0);
   ap.finger_open_m = want(arm, "finger_open_mm", ap.finger_open_m * 1000.0, 1.0, 40.0) / 1000.0;
   if (auto start = arm.find("start_m")) {
@@ -221,10 +225,11 @@ Scenario parse_scenario(const std::string& text, const std::string& source) {
 
   // simulation (optional)
   if (auto sim = root.find("sim")) {
-    refuse_unknown(*sim, {"dt_s", "max_time_s", "settle_after_done_s"});
+    refuse_unknown(*sim, {"dt_s", "max_time_s", "settle_after_done_s", "partial_slip_ratio"});
     s.dt_s = want(*sim, "dt_s", s.dt_s, 1e-6, 1e-3);
     s.max_time_s = want(*sim, "max_time_s", s.max_time_s, 0.1, 3600.0);
     s.settle_after_done_s = want(*sim, "settle_after_done_s", s.settle_after_done_s, 0.0, 10.0);
+    s.partial_slip_ratio = want(*sim, "partial_slip_ratio", s.partial_slip_ratio, 0.05, 1.0);
   }
   if (1.0 / (c.fps * s.dt_s) < 1.0) {
     root["sim"]["dt_s"].fail("must not exceed the camera's frame period");

@@ -98,6 +98,8 @@ class Renderer {
     std::size_t offset;  // into cache_
   };
   void draw_spot(std::size_t k, const ElementLoad& load);
+  template <typename Pixel>
+  void noisy_box(std::size_t k, util::Random& rng, Image& out) const noexcept;
 
   Calibration cal_;
   CameraParams cam_;

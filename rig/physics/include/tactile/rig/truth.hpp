@@ -19,12 +19,15 @@ struct ElementTruth {
   double fy_n = 0;       // along y_f
   double ux_mm = 0;      // true shear displacement of the element's spot
   double uy_mm = 0;
-  // Slip episode (see slip rule in docs/rig.md): the tip broke loose in this frame, or it broke
-  // loose earlier in an episode that continues while the cap surface keeps moving over the
-  // element's base by more than the slip threshold per frame.
+  // The slip rule of docs/rig.md: the tip slid over the cap by more than the slip threshold
+  // in this frame; or the cap surface moved over the element's base by more than the threshold
+  // while the element was already sliding or loaded beyond the partial-slip ratio of its
+  // static limit (Cattaneo-Mindlin micro-slip at the feeler's rim).
   bool sliding = false;
   std::uint32_t releases = 0;  // stick-slip releases within the frame interval
+  double slip_mm = 0;          // distance the tip slid over the cap in the frame
   double surface_mm = 0;       // cap surface motion over the element's base in the frame
+  double load_ratio = 0;       // |F_t| / (mu_s F_n) at the end of the frame
 };
 
 struct FingertipTruth {
@@ -50,8 +53,10 @@ struct GroundTruth {
 // allocation; take() clears the world's per-frame accumulators.
 class TruthRecorder {
  public:
-  // `visible_fz_n`: the force of the sensor's contact threshold, g(contact.on).
-  explicit TruthRecorder(double visible_fz_n) : visible_fz_n_(visible_fz_n) {}
+  // `visible_fz_n`: the force of the sensor's contact threshold, g(contact.on);
+  // `partial_slip_ratio`: the load ratio beyond which a moving contact counts as slipping.
+  TruthRecorder(double visible_fz_n, double partial_slip_ratio)
+      : visible_fz_n_(visible_fz_n), partial_slip_ratio_(partial_slip_ratio) {}
 
   // `slip_threshold_mm`: the per-frame displacement the measurement calls a slip at this
   // moment (dr, or dr times the twist factor); an episode continues while the cap surface moves
@@ -61,6 +66,7 @@ class TruthRecorder {
 
  private:
   double visible_fz_n_;
+  double partial_slip_ratio_;
   GroundTruth truth_;
 };
 

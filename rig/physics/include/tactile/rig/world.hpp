@@ -40,17 +40,20 @@ struct BottleParams {
   double height_m = 0.18;                   // neck top above the table (the cap seats here)
   double free_turn_deg = 240.0;             // the cap turns freely this far, then tightens
   double free_torque_nm = 0.002;            // thread friction while turning freely
-  double tight_stiffness_nm_per_rad = 5.0;  // slope of the rising torque past free_turn
+  double tight_stiffness_nm_per_rad = 50.0;  // slope of the rising torque past free_turn
   double capture_radius_m = 0.004;  // the neck's chamfer centres a cap this close to its axis
   bool tighten_clockwise = true;    // seen from above (yaw decreasing): a right-hand thread
 };
 
 struct ArmParams {
-  double max_accel_mps2 = 0.5;      // bound on the wrist's linear acceleration
-  double max_yaw_accel_rps2 = 4.0;  // bound on the wrist's angular acceleration
+  double max_accel_mps2 = 0.5;        // bound on the wrist's linear acceleration
+  double stop_decel_mps2 = 2.0;       // Hold and Stop brake the wrist this hard
+  double max_yaw_accel_rps2 = 2.0;    // bound on the wrist's angular acceleration
+  double stop_yaw_decel_rps2 = 20.0;  // Hold and Stop brake the wrist's turn this hard
   double vibration_m = 0.0002;      // amplitude of the vertical wrist vibration
   double vibration_hz = 12.0;
-  double vibration_rise_s = 0.2;   // the vibration grows and fades with the arm's motion
+  double vibration_rise_s = 0.05;     // the vibration follows the arm's speed this fast
+  double vibration_full_speed_mps = 0.05;  // the amplitude is reached at this wrist speed
   double finger_accel_mps2 = 1.0;  // bound on each fingertip's acceleration
   double finger_open_m = 0.008;    // initial gap between each fingertip and the cap surface
   Vec3 start_position_m{0.35, -0.10, 0.25};  // initial grasp centre
@@ -76,10 +79,10 @@ struct WorldParams {
   ArmParams arm;
   FingertipParams fingertip;
   double gravity_mps2 = 9.81;
-  double table_stiffness_npm = 20000.0;
-  double table_damping_nspm = 10.0;
-  double seat_stiffness_npm = 20000.0;  // the bottle neck under the cap
-  double seat_damping_nspm = 10.0;
+  double table_stiffness_npm = 200000.0;
+  double table_damping_nspm = 20.0;
+  double seat_stiffness_npm = 200000.0;  // the bottle neck under the cap
+  double seat_damping_nspm = 20.0;
   double slip_speed_eps_mps = 0.001;  // regularisation of table and thread friction
 };
 
@@ -121,6 +124,7 @@ struct Element {
   // Accumulated since the last take_frame(): stick-slip releases and the tangential motion of
   // the cap surface over the element's base (mm, along x_f, y_f).
   std::uint32_t frame_releases = 0;
+  double frame_slip_mm = 0;  // distance the tip slid over the surface in those releases
   std::array<double, 2> frame_surface_mm{};
 };
 

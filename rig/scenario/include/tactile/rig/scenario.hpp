@@ -23,6 +23,8 @@ struct Scenario {
   double dt_s = 1e-4;         // physics step; a frame period holds a whole number of steps
   double max_time_s = 120.0;  // simulated time after which a run stops, incomplete
   double settle_after_done_s = 0.3;
+  // Ground truth: a moving contact loaded beyond this share of its static limit is slipping.
+  double partial_slip_ratio = 0.1;
   // Controller settings the scenario overrides (names as in the `controller` section; the
   // lockstep runner maps them onto the control core's Config).
   std::vector<std::pair<std::string, double>> controller;

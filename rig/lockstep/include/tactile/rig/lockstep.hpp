@@ -1,0 +1,152 @@
+#pragma once
+
+// The lockstep runner (docs/rig.md, "Lockstep"): the scenario in one process on simulated time,
+// with the world physics, the optics rendering real images, the real measurement core
+// (tactile::Extractor) and the real control core (tactile::control) in the loop. Deterministic
+// for a seed: no clock is read.
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tactile/calibration.hpp"
+#include "tactile/rig/scenario.hpp"
+#include "tactile/rig/truth.hpp"
+
+namespace tactile::rig {
+
+struct SlipMetrics {
+  double precision = 0;
+  double recall = 0;
+  double latency_frames_p50 = 0;
+  double latency_frames_p99 = 0;
+  std::uint64_t true_positives = 0;
+  std::uint64_t false_positives = 0;
+  std::uint64_t false_negatives = 0;
+  std::uint64_t onsets = 0;         // true slip episodes that began
+  std::uint64_t missed_onsets = 0;  // of which no SLIP ever covered (counted as kMissedLatency)
+};
+
+// Latency given to an onset that no SLIP covered within its episode and two frames after.
+inline constexpr double kMissedLatencyFrames = 1000.0;
+
+// The scenario report: INTERFACES.md section 4, plus a few keys of our own (docs/rig.md).
+struct Report {
+  bool completed = false;
+  bool dropped = false;
+  std::optional<std::string> grasp_classified;    // "grasp" / "release" on lift, or null
+  std::optional<std::string> release_classified;  // "release" on lowering, or null
+  int recompressions = 0;
+  int twist_cycles = 0;
+  std::optional<int> tightened_cycle;
+  std::optional<int> true_tight_cycle;
+  double max_fz_N = 0;
+  int over_events = 0;
+  SlipMetrics slip;
+  double force_rmse_normal_N = 0;
+  double force_rmse_shear_N = 0;
+  // Ours.
+  std::uint64_t seed = 0;
+  double sim_time_s = 0;
+  std::uint64_t frames = 0;
+  double physics_step_s = 0;
+  double final_cap_angle_deg = 0;
+  std::string end_reason;  // "done", "aborted: ...", "max_time", "physics"
+  double normal_full_scale_N = 0;
+};
+
+// One camera frame of the run, for plots.
+struct FrameSample {
+  double t = 0;
+  std::uint8_t phase = 0;  // control::Phase
+  std::uint32_t twist_cycle = 0;
+  std::array<bool, kFingertips> touch{}, slip{}, over{}, true_slip{};
+  std::array<double, kFingertips> max_fz_measured{}, max_fz_true{};
+  std::array<double, kFingertips> fingertip_x_m{};  // apex, world x
+  // Signed y-directional centroid change (mm) of the in-contact element moving most.
+  std::array<double, kFingertips> dy_mm{};
+  double cap_angle_deg = 0;
+  double cap_z_m = 0;
+  double cap_yaw_rad = 0;
+  std::uint8_t cap_place = 0;  // CapPlace
+  double wrist_z_m = 0;
+  double wrist_yaw_rad = 0;
+  // Element-frames of this frame scored as true positive, false positive, false negative.
+  std::array<std::uint16_t, kFingertips> tp{}, fp{}, fn{};
+};
+
+
+struct EventRecord {
+  double t = 0;
+  std::uint8_t kind = 0;  // control::EventKind
+  std::string kind_name;
+  std::string phase;
+  std::uint32_t cycle = 0;
+  int fingertip = -1;
+  double value = 0;
+  std::string text;
+};
+
+// The measured and true state of both fingertips' elements at one moment (Fig. 3 style plots).
+struct Snapshot {
+  double t = 0;
+  std::string label;
+  struct Element {
+    double x_px = 0, y_px = 0;  // disk centre
+    bool contact = false;       // measured
+    bool slip = false;          // measured per-frame displacement beyond the threshold
+    bool true_sliding = false;
+    double ux_mm = 0, uy_mm = 0;  // measured shear displacement
+    double dx_mm = 0, dy_mm = 0;  // measured per-frame displacement
+    double fz_n = 0;
+  };
+  std::array<std::array<Element, kElementsPerFingertip>, kFingertips> fingertips{};
+};
+
+// An element-frame where the measurement and the truth disagree about slip (for diagnosis).
+struct Mismatch {
+  double t = 0;
+  int fingertip = 0;
+  std::uint32_t element = 0;
+  bool measured_slip = false;
+  double measured_d_mm = 0;  // |(dx, dy)| measured
+  double measured_fz = 0;
+  ElementTruth truth;
+};
+
+struct RunSeries {
+  std::vector<FrameSample> frames;
+  std::vector<Mismatch> mismatches;
+  std::vector<EventRecord> events;
+  std::vector<Snapshot> snapshots;
+};
+
+struct LockstepOptions {
+  // Physics step override (0: the scenario's); the step-size test runs with a tenth.
+  double dt_s = 0;
+  bool record_series = true;
+};
+
+struct LockstepResult {
+  Report report;
+  RunSeries series;
+  std::array<Calibration, kFingertips> calibrations;
+  bool physics_finite = true;  // no step ever produced a non-finite value
+};
+
+// Runs the scenario to its end (DONE, ABORTED, a drop or max_time_s). Throws only for a bad
+// scenario (std::invalid_argument from the cores' constructors).
+LockstepResult run_lockstep(const Scenario& scenario, const LockstepOptions& options = {});
+
+// The per-frame series as CSV (one header line, one line per frame).
+std::string series_csv(const RunSeries& series);
+
+// The mismatches as CSV.
+std::string mismatches_csv(const RunSeries& series);
+
+// The report as one JSON object (keys of INTERFACES.md section 4 first; latency_ms is null in
+// lockstep). Deterministic text: the same report gives the same bytes.
+std::string report_json(const Report& report);
+
+}  // namespace tactile::rig

@@ -1,0 +1,591 @@
+#include "tactile/rig/lockstep.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "tactile/control/config.hpp"
+#include "tactile/control/controller.hpp"
+#include "tactile/extractor.hpp"
+#include "tactile/rig/optics.hpp"
+#include "tactile/rig/world.hpp"
+#include "tactile/util/json.hpp"
+
+#include <fmt/format.h>
+
+namespace tactile::rig {
+namespace {
+
+control::Config controller_config(const Scenario& sc) {
+  control::Config cfg;
+  cfg.cap_x_m = sc.world.cap.x_m;
+  cfg.cap_y_m = sc.world.cap.y_m;
+  cfg.bottle_x_m = sc.world.bottle.x_m;
+  cfg.bottle_y_m = sc.world.bottle.y_m;
+  cfg.tighten_clockwise = sc.world.bottle.tighten_clockwise;
+  for (const auto& [key, v] : sc.controller) {
+    const auto count = static_cast<std::uint32_t>(std::max(0.0, std::round(v)));
+    if (key == "f1_n") cfg.f1_n = v;
+    else if (key == "f2_n") cfg.f2_n = v;
+    else if (key == "dr_mm") cfg.dr_mm = v;
+    else if (key == "twist_dr_factor") cfg.twist_dr_factor = v;
+    else if (key == "approach_speed_mps") cfg.approach_speed_mps = v;
+    else if (key == "recompress_gain_mps") cfg.recompress_gain_mps = v;
+    else if (key == "recompress_duration_s") cfg.recompress_duration_s = v;
+    else if (key == "backoff_speed_mps") cfg.backoff_speed_mps = v;
+    else if (key == "max_finger_speed_mps") cfg.max_finger_speed_mps = v;
+    else if (key == "safe_height_m") cfg.safe_height_m = v;
+    else if (key == "grasp_height_m") cfg.grasp_height_m = v;
+    else if (key == "carry_height_m") cfg.carry_height_m = v;
+    else if (key == "lower_limit_m") cfg.lower_limit_m = v;
+    else if (key == "retract_height_m") cfg.retract_height_m = v;
+    else if (key == "move_speed_mps") cfg.move_speed_mps = v;
+    else if (key == "lift_speed_mps") cfg.lift_speed_mps = v;
+    else if (key == "carry_speed_mps") cfg.carry_speed_mps = v;
+    else if (key == "lower_speed_mps") cfg.lower_speed_mps = v;
+    else if (key == "max_yaw_rate_rps") cfg.max_yaw_rate_rps = v;
+    else if (key == "twist_yaw_rate_rps") cfg.twist_yaw_rate_rps = v;
+    else if (key == "grasp_settle_s") cfg.grasp_settle_s = v;
+    else if (key == "open_speed_mps") cfg.open_speed_mps = v;
+    else if (key == "open_distance_m") cfg.open_distance_m = v;
+    else if (key == "open_settle_s") cfg.open_settle_s = v;
+    else if (key == "twist_angle_deg") cfg.twist_angle_rad = v * std::numbers::pi / 180.0;
+    else if (key == "ns") cfg.ns = count;
+    else if (key == "cycle_slip_min") cfg.cycle_slip_min = count;
+    else if (key == "max_twist_cycles") cfg.max_twist_cycles = count;
+    else if (key == "search_timeout_s") cfg.search_timeout_s = v;
+    else if (key == "segment_timeout_s") cfg.segment_timeout_s = v;
+  }
+  cfg.validate();
+  return cfg;
+}
+
+ArmCommand to_arm_command(const control::Command& c) {
+  ArmCommand a;
+  switch (c.kind) {
+    case control::CommandKind::kNone:
+      a.kind = CommandKind::kNone;
+      break;
+    case control::CommandKind::kMoveTo:
+      a.kind = CommandKind::kMoveTo;
+      a.segment_id = c.move_to.segment_id;
+      a.target_position_m = c.move_to.target.position_m;
+      a.target_yaw_rad = c.move_to.target.yaw_rad;
+      a.max_speed_mps = c.move_to.max_speed_mps;
+      a.max_yaw_rate_rps = c.move_to.max_yaw_rate_rps;
+      a.keep_finger_velocities = c.move_to.keep_finger_velocities;
+      break;
+    case control::CommandKind::kFingerVelocities:
+      a.kind = CommandKind::kFingerVelocities;
+      a.finger_velocity_mps = c.finger_velocities.velocity_mps;
+      break;
+    case control::CommandKind::kHold:
+      a.kind = CommandKind::kHold;
+      break;
+    case control::CommandKind::kOpen:
+      a.kind = CommandKind::kOpen;
+      a.open_speed_mps = c.open.speed_mps;
+      a.open_distance_m = c.open.distance_m;
+      break;
+    case control::CommandKind::kStop:
+      a.kind = CommandKind::kStop;
+      break;
+  }
+  return a;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
+  return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
+}
+
+// splitmix64: independent seeds for the noise pools and frame offsets from the scenario seed.
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+
+struct ElementScore {
+  bool was_sliding = false;
+  bool pending = false;
+  std::uint64_t onset = 0;
+  std::uint64_t last_true = 0;
+};
+
+}  // namespace
+
+LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
+  LockstepResult result;
+  Report& rep = result.report;
+  rep.seed = sc.seed;
+
+  const control::Config cfg = controller_config(sc);
+  World world(sc.world);
+  const int steps = opt.dt_s > 0 ? std::max(1, static_cast<int>(std::lround(
+                                                   1.0 / (sc.camera.fps * opt.dt_s))))
+                                 : sc.steps_per_frame();
+  const double dt = 1.0 / (sc.camera.fps * steps);
+  rep.physics_step_s = dt;
+
+  const auto normals = world.element_normals();
+  const std::array<const char*, kFingertips> ids{"left", "right"};
+  std::vector<Renderer> renderers;
+  std::vector<Extractor> extractors;
+  std::array<util::Random, kFingertips> frame_rng{util::Random(mix(sc.seed * 4 + 1)),
+                                                  util::Random(mix(sc.seed * 4 + 2))};
+  std::array<Image, kFingertips> images;
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    result.calibrations[i] = make_calibration(ids[i], sc.camera, sc.optics, normals);
+    renderers.emplace_back(result.calibrations[i], sc.camera, sc.optics,
+                           mix(sc.seed * 4 + 3 + i * 7919));
+    ExtractorOptions eo;
+    eo.reference_frames = sc.optics.reference_frames;
+    extractors.emplace_back(result.calibrations[i], eo);
+  }
+  const Calibration& cal0 = result.calibrations[0];
+  rep.normal_full_scale_N = cal0.normal_curve.y().back();
+  TruthRecorder truth(cal0.normal_curve(cal0.contact_on), sc.partial_slip_ratio);
+
+  // The no-load reference, captured before the task starts (nothing touches the sensors).
+  std::array<std::array<ElementLoad, kElementsPerFingertip>, kFingertips> loads{};
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    extractors[i].begin_reference();
+    ReferenceResult r{};
+    for (int k = 0; k < sc.optics.reference_frames; ++k) {
+      renderers[i].render(loads[i], frame_rng[i], images[i]);
+      r = extractors[i].add_reference_frame(images[i].view());
+    }
+    if (r.status != ReferenceStatus::kComplete) {
+      throw std::runtime_error(std::string("lockstep: no-load reference refused: ") +
+                               to_string(r.status));
+    }
+  }
+
+  control::GraspMoveTwistController controller(cfg);
+  control::Phase phase = control::Phase::kIdle;
+  std::uint32_t twist_cycle = 0;
+  bool done_seen = false;
+  double done_at = 0;
+  double dropped_at = -1;
+  std::array<std::array<ElementScore, kElementsPerFingertip>, kFingertips> score{};
+  std::vector<double> latencies;
+  double sq_normal = 0;
+  double sq_shear = 0;
+  std::uint64_t n_normal = 0;
+  std::uint64_t n_shear = 0;
+  bool transport_snapshot = false;
+
+  std::uint64_t frame = 0;
+  const auto max_frames = static_cast<std::uint64_t>(std::ceil(sc.max_time_s * sc.camera.fps));
+  rep.end_reason = "max_time";
+  while (frame < max_frames) {
+    bool finite = true;
+    for (int s = 0; s < steps && finite; ++s)
+      finite = world.step(dt);
+    if (!finite) {
+      result.physics_finite = false;
+      rep.end_reason = "physics";
+      break;
+    }
+    ++frame;
+    const double t = static_cast<double>(frame) / sc.camera.fps;
+    const double thr = cfg.dr_mm * (control::is_twist_phase(phase) ? cfg.twist_dr_factor : 1.0);
+    const GroundTruth& gt = truth.take(world, frame, thr);
+
+    // Render and measure both fingertips.
+    std::array<control::FingertipInput, control::kFingertips> tips{};
+    for (std::size_t i = 0; i < kFingertips; ++i) {
+      for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
+        const ElementTruth& et = gt.fingertips[i].elements[k];
+        loads[i][k] = {et.fz_n, et.ux_mm, et.uy_mm};
+      }
+      renderers[i].render(loads[i], frame_rng[i], images[i]);
+      extractors[i].measure(images[i].view(),
+                            {frame, static_cast<std::int64_t>(std::llround(t * 1e9))});
+      tips[i].elements = extractors[i].readings();
+      tips[i].normals = normals;
+      tips[i].sequence = frame;
+      tips[i].camera_timestamp_ns = std::llround(t * 1e9);
+      tips[i].fresh = true;
+      tips[i].stale = false;
+    }
+    control::ControllerInput in{};
+    in.fingertips = tips;
+    in.arm.wrist.position_m = world.arm().position_m;
+    in.arm.wrist.yaw_rad = world.arm().yaw_rad;
+    in.arm.active_segment_id = world.arm().active_segment_id;
+    in.arm.segment_done = world.arm().segment_done;
+    in.arm.holding = world.arm().holding;
+    for (std::size_t i = 0; i < kFingertips; ++i)
+      in.arm.fingertip_position_m[i] = world.fingertip(i).offset_w;
+    in.now_s = t;
+    const control::ControllerOutput out = controller.update(in);
+
+    // Score the measurement against the truth, element-frame by element-frame.
+    FrameSample sample;
+    sample.t = t;
+    for (std::size_t i = 0; i < kFingertips; ++i) {
+      const auto readings = extractors[i].readings();
+      double best = -1;
+      for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
+        const ElementReading& r = readings[k];
+        const ElementTruth& et = gt.fingertips[i].elements[k];
+        const double d = std::hypot(r.dx_mm, r.dy_mm);
+        const bool predicted = r.contact && r.has_displacement && d > thr;
+        if (predicted && et.sliding) {
+          ++rep.slip.true_positives;
+          ++sample.tp[i];
+        }
+        if (predicted && !et.sliding) {
+          ++rep.slip.false_positives;
+          ++sample.fp[i];
+        }
+        if (!predicted && et.sliding) {
+          ++rep.slip.false_negatives;
+          ++sample.fn[i];
+        }
+        if (opt.record_series && predicted != et.sliding) {
+          result.series.mismatches.push_back(
+              {t, static_cast<int>(i), static_cast<std::uint32_t>(k), predicted, d, r.fz, et});
+        }
+        ElementScore& es = score[i][k];
+        if (et.sliding && !es.was_sliding) {
+          ++rep.slip.onsets;
+          if (es.pending) {  // a new episode before the last was covered
+            ++rep.slip.missed_onsets;
+            latencies.push_back(kMissedLatencyFrames);
+          }
+          es.pending = true;
+          es.onset = frame;
+        }
+        if (et.sliding) es.last_true = frame;
+        if (es.pending && predicted) {
+          latencies.push_back(static_cast<double>(frame - es.onset));
+          es.pending = false;
+        } else if (es.pending && !et.sliding && frame > es.last_true + 2) {
+          ++rep.slip.missed_onsets;
+          latencies.push_back(kMissedLatencyFrames);
+          es.pending = false;
+        }
+        es.was_sliding = et.sliding;
+
+        if (et.visible || r.contact) {
+          const double en = (r.contact ? r.fz : 0.0) - et.fz_n;
+          const double ex = (r.contact ? r.fx : 0.0) - et.fx_n;
+          const double ey = (r.contact ? r.fy : 0.0) - et.fy_n;
+          sq_normal += en * en;
+          sq_shear += ex * ex + ey * ey;
+          ++n_normal;
+          n_shear += 2;
+        }
+        if (r.contact) rep.max_fz_N = std::max(rep.max_fz_N, r.fz);
+        if (r.contact && r.has_displacement && d > best) {
+          best = d;
+          sample.dy_mm[i] = r.dy_mm;
+        }
+        sample.max_fz_measured[i] = std::max(sample.max_fz_measured[i], r.contact ? r.fz : 0.0);
+        sample.max_fz_true[i] = std::max(sample.max_fz_true[i], et.fz_n);
+        sample.true_slip[i] = sample.true_slip[i] || et.sliding;
+      }
+      sample.touch[i] = out.flags.fingertip[i].touch;
+      sample.slip[i] = out.flags.fingertip[i].slip;
+      sample.over[i] = out.flags.fingertip[i].over;
+      sample.fingertip_x_m[i] = world.fingertip(i).apex_world.x;
+    }
+    sample.phase = static_cast<std::uint8_t>(out.phase);
+    sample.twist_cycle = out.twist_cycle;
+    sample.cap_angle_deg = gt.cap_angle_deg;
+    sample.cap_z_m = gt.object_position_m.z;
+    sample.wrist_z_m = world.arm().position_m.z;
+    sample.wrist_yaw_rad = world.arm().yaw_rad;
+    sample.cap_yaw_rad = gt.cap_yaw_rad;
+    sample.cap_place = static_cast<std::uint8_t>(gt.place);
+
+    // True tightening: the cycle in which the cap angle first passed free_turn_deg.
+    if (gt.cap_tight && !rep.true_tight_cycle) {
+      rep.true_tight_cycle = static_cast<int>(out.twist_cycle);
+    }
+
+    // Events.
+    std::string snapshot_label;
+    for (const control::Event& e : out.events) {
+      switch (e.kind) {
+        case control::EventKind::kGraspClassified:
+          if (e.phase == control::Phase::kLift && !rep.grasp_classified) {
+            rep.grasp_classified = "grasp";
+          } else if (e.phase == control::Phase::kLower && !rep.release_classified) {
+            rep.release_classified = "grasp";
+          }
+          snapshot_label = "grasp classified";
+          break;
+        case control::EventKind::kReleaseClassified:
+          if (e.phase == control::Phase::kLift && !rep.grasp_classified) {
+            rep.grasp_classified = "release";
+          } else if (e.phase == control::Phase::kLower && !rep.release_classified) {
+            rep.release_classified = "release";
+          }
+          snapshot_label = "release classified";
+          break;
+        case control::EventKind::kRecompress:
+          ++rep.recompressions;
+          if (e.phase == control::Phase::kTransport && !transport_snapshot) {
+            transport_snapshot = true;
+            snapshot_label = "re-compression in transport";
+          }
+          break;
+        case control::EventKind::kOver:
+          ++rep.over_events;
+          break;
+        case control::EventKind::kCapTight:
+          if (!rep.tightened_cycle) rep.tightened_cycle = static_cast<int>(e.cycle);
+          snapshot_label = "cap tight";
+          break;
+        case control::EventKind::kDone:
+          rep.completed = true;
+          break;
+        case control::EventKind::kAborted:
+          rep.end_reason = std::string("aborted: ") + e.text;
+          break;
+        default:
+          break;
+      }
+      if (opt.record_series) {
+        EventRecord er;
+        er.t = t;
+        er.kind = static_cast<std::uint8_t>(e.kind);
+        er.kind_name = control::to_string(e.kind);
+        er.phase = control::to_string(e.phase);
+        er.cycle = e.cycle;
+        er.fingertip = e.fingertip;
+        er.value = e.value;
+        er.text = e.text;
+        result.series.events.push_back(std::move(er));
+      }
+    }
+    if (opt.record_series) {
+      result.series.frames.push_back(sample);
+      if (!snapshot_label.empty()) {
+        Snapshot snap;
+        snap.t = t;
+        snap.label = snapshot_label;
+        for (std::size_t i = 0; i < kFingertips; ++i) {
+          const auto readings = extractors[i].readings();
+          for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
+            const ElementReading& r = readings[k];
+            auto& s = snap.fingertips[i][k];
+            s.x_px = result.calibrations[i].elements[k].center_px.x;
+            s.y_px = result.calibrations[i].elements[k].center_px.y;
+            s.contact = r.contact;
+            s.slip = r.contact && r.has_displacement && std::hypot(r.dx_mm, r.dy_mm) > thr;
+            s.true_sliding = gt.fingertips[i].elements[k].sliding;
+            s.ux_mm = r.ux_mm;
+            s.uy_mm = r.uy_mm;
+            s.dx_mm = r.dx_mm;
+            s.dy_mm = r.dy_mm;
+            s.fz_n = r.fz;
+          }
+        }
+        result.series.snapshots.push_back(std::move(snap));
+      }
+    }
+
+    world.apply(to_arm_command(out.command));
+    phase = out.phase;
+    twist_cycle = out.twist_cycle;
+    rep.twist_cycles = static_cast<int>(std::max<std::uint32_t>(
+        static_cast<std::uint32_t>(rep.twist_cycles), out.twist_cycle));
+    rep.final_cap_angle_deg = gt.cap_angle_deg;
+    if (gt.dropped && dropped_at < 0) dropped_at = t;
+
+    if (controller.done() && !done_seen) {
+      done_seen = true;
+      done_at = t;
+      if (rep.completed) rep.end_reason = "done";
+    }
+    if (done_seen && t - done_at >= sc.settle_after_done_s) break;
+    if (dropped_at >= 0 && t - dropped_at >= 0.5) {
+      rep.end_reason = "dropped";
+      break;
+    }
+  }
+  (void)twist_cycle;
+
+  // Onsets still waiting at the end were never covered.
+  for (auto& tip : score) {
+    for (ElementScore& es : tip) {
+      if (es.pending) {
+        ++rep.slip.missed_onsets;
+        latencies.push_back(kMissedLatencyFrames);
+      }
+    }
+  }
+  rep.dropped = world.cap().dropped;
+  rep.frames = frame;
+  rep.sim_time_s = static_cast<double>(frame) / sc.camera.fps;
+  const auto tp = static_cast<double>(rep.slip.true_positives);
+  const auto fp = static_cast<double>(rep.slip.false_positives);
+  const auto fn = static_cast<double>(rep.slip.false_negatives);
+  rep.slip.precision = tp + fp > 0 ? tp / (tp + fp) : 1.0;
+  rep.slip.recall = tp + fn > 0 ? tp / (tp + fn) : 1.0;
+  rep.slip.latency_frames_p50 = percentile(latencies, 0.50);
+  rep.slip.latency_frames_p99 = percentile(latencies, 0.99);
+  rep.force_rmse_normal_N = n_normal > 0 ? std::sqrt(sq_normal / static_cast<double>(n_normal)) : 0;
+  rep.force_rmse_shear_N = n_shear > 0 ? std::sqrt(sq_shear / static_cast<double>(n_shear)) : 0;
+  return result;
+}
+
+std::string series_csv(const RunSeries& series) {
+  std::string o =
+      "t,phase,cycle,cap_place,cap_angle_deg,cap_z_m,cap_yaw_rad,wrist_z_m,wrist_yaw_rad";
+  for (const char* tip : {"left", "right"}) {
+    for (const char* col : {"x_m", "dy_mm", "fz_meas", "fz_true", "touch", "slip", "true_slip",
+                            "over", "tp", "fp", "fn"}) {
+      o += fmt::format(",{}_{}", tip, col);
+    }
+  }
+  o += "\n";
+  for (const FrameSample& f : series.frames) {
+    o += fmt::format("{:.3f},{},{},{},{:.4f},{:.6f},{:.5f},{:.6f},{:.5f}", f.t,
+                     control::to_string(static_cast<control::Phase>(f.phase)), f.twist_cycle,
+                     to_string(static_cast<CapPlace>(f.cap_place)), f.cap_angle_deg, f.cap_z_m,
+                     f.cap_yaw_rad, f.wrist_z_m, f.wrist_yaw_rad);
+    for (std::size_t i = 0; i < kFingertips; ++i) {
+      o += fmt::format(",{:.6f},{:.5f},{:.4f},{:.4f},{:d},{:d},{:d},{:d},{},{},{}",
+                       f.fingertip_x_m[i], f.dy_mm[i], f.max_fz_measured[i], f.max_fz_true[i],
+                       f.touch[i], f.slip[i], f.true_slip[i], f.over[i], f.tp[i], f.fp[i],
+                       f.fn[i]);
+    }
+    o += "\n";
+  }
+  return o;
+}
+
+std::string mismatches_csv(const RunSeries& series) {
+  std::string o =
+      "t,fingertip,element,measured_slip,measured_d_mm,measured_fz,true_sliding,true_fz,"
+      "releases,slip_mm,surface_mm,load_ratio,ux_mm,uy_mm\n";
+  for (const Mismatch& m : series.mismatches) {
+    o += fmt::format("{:.3f},{},{},{:d},{:.5f},{:.4f},{:d},{:.4f},{},{:.5f},{:.5f},{:.3f},{:.5f},{:.5f}\n",
+                     m.t, m.fingertip, m.element, m.measured_slip, m.measured_d_mm, m.measured_fz,
+                     m.truth.sliding, m.truth.fz_n, m.truth.releases, m.truth.slip_mm,
+                     m.truth.surface_mm, m.truth.load_ratio, m.truth.ux_mm, m.truth.uy_mm);
+  }
+  return o;
+}
+
+std::string report_json(const Report& r) {
+  using util::json_number;
+  using util::json_quote;
+  std::string o;
+  const auto key = [&o](const char* k) {
+    o += json_quote(k);
+    o += ": ";
+  };
+  const auto opt_string = [&o](const std::optional<std::string>& s) {
+    o += s ? json_quote(*s) : std::string("null");
+  };
+  const auto opt_int = [&o](const std::optional<int>& v) {
+    o += v ? std::to_string(*v) : std::string("null");
+  };
+  o += "{";
+  key("completed");
+  o += r.completed ? "true" : "false";
+  o += ", ";
+  key("dropped");
+  o += r.dropped ? "true" : "false";
+  o += ",\n ";
+  key("grasp_classified");
+  opt_string(r.grasp_classified);
+  o += ", ";
+  key("release_classified");
+  opt_string(r.release_classified);
+  o += ",\n ";
+  key("recompressions");
+  o += std::to_string(r.recompressions);
+  o += ", ";
+  key("twist_cycles");
+  o += std::to_string(r.twist_cycles);
+  o += ", ";
+  key("tightened_cycle");
+  opt_int(r.tightened_cycle);
+  o += ",\n ";
+  key("true_tight_cycle");
+  opt_int(r.true_tight_cycle);
+  o += ", ";
+  key("max_fz_N");
+  json_number(o, r.max_fz_N);
+  o += ", ";
+  key("over_events");
+  o += std::to_string(r.over_events);
+  o += ",\n ";
+  key("slip");
+  o += "{";
+  key("precision");
+  json_number(o, r.slip.precision);
+  o += ", ";
+  key("recall");
+  json_number(o, r.slip.recall);
+  o += ", ";
+  key("latency_frames_p50");
+  json_number(o, r.slip.latency_frames_p50);
+  o += ", ";
+  key("latency_frames_p99");
+  json_number(o, r.slip.latency_frames_p99);
+  o += ",\n          ";
+  key("true_positives");
+  o += std::to_string(r.slip.true_positives);
+  o += ", ";
+  key("false_positives");
+  o += std::to_string(r.slip.false_positives);
+  o += ", ";
+  key("false_negatives");
+  o += std::to_string(r.slip.false_negatives);
+  o += ", ";
+  key("onsets");
+  o += std::to_string(r.slip.onsets);
+  o += ", ";
+  key("missed_onsets");
+  o += std::to_string(r.slip.missed_onsets);
+  o += "},\n ";
+  key("force_rmse_N");
+  o += "{";
+  key("normal");
+  json_number(o, r.force_rmse_normal_N);
+  o += ", ";
+  key("shear");
+  json_number(o, r.force_rmse_shear_N);
+  o += "},\n ";
+  key("latency_ms");
+  o += "null,\n ";
+  key("lockstep");
+  o += "{";
+  key("seed");
+  o += std::to_string(r.seed);
+  o += ", ";
+  key("sim_time_s");
+  json_number(o, r.sim_time_s);
+  o += ", ";
+  key("frames");
+  o += std::to_string(r.frames);
+  o += ", ";
+  key("physics_step_s");
+  json_number(o, r.physics_step_s);
+  o += ",\n              ";
+  key("final_cap_angle_deg");
+  json_number(o, r.final_cap_angle_deg);
+  o += ", ";
+  key("normal_full_scale_N");
+  json_number(o, r.normal_full_scale_N);
+  o += ", ";
+  key("end_reason");
+  o += json_quote(r.end_reason);
+  o += "}}\n";
+  return o;
+}
+
+}  // namespace tactile::rig
