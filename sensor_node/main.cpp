@@ -84,8 +84,8 @@ int run(int argc, char** argv) {
 
     tactile::util::install_stop_handlers();
     zmq::context_t ctx;
-    tactile::sensor::SharedPublisher pub(ctx, cfg.publish);
-    tactile::util::log_info("publishing on {}", pub.endpoint());
+    tactile::sensor::SharedPublisher pub(ctx, cfg.publish, cfg.security ? &*cfg.security : nullptr);
+    tactile::util::log_info("publishing on {}{}", pub.endpoint(), cfg.security ? " (CURVE)" : "");
     std::vector<std::unique_ptr<tactile::sensor::Pipeline>> pipelines;
     for (const CameraConfig& c : cfg.cameras) {
       pipelines.push_back(std::make_unique<tactile::sensor::Pipeline>(

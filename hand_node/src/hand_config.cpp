@@ -12,7 +12,7 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
   if (warnings != nullptr) {
     for (const auto& k : root.unknown_keys({"format", "fingertips", "subscribe", "arm", "events",
                                             "heartbeat_period_s", "control_period_s",
-                                            "arm_timeout_s", "controller"})) {
+                                            "arm_timeout_s", "controller", "security"})) {
       warnings->push_back(path.string() + ": unknown key '" + k + "' ignored");
     }
   }
@@ -64,6 +64,20 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
   cfg.arm_timeout_s = positive("arm_timeout_s", cfg.arm_timeout_s);
   if (auto c = root.find("controller"))
     cfg.controller = config::parse_controller_config(*c, warnings);
+  if (auto sec = root.find("security")) {
+    const auto load = [&](const char* key, auto loader) {
+      const config::Node n = (*sec)[key];
+      try {
+        return loader(base / n.as_string());
+      } catch (const std::runtime_error& e) {
+        n.fail(e.what());
+      }
+    };
+    const wire::CurveKeyPair own = load("secret_key", wire::load_key_pair);
+    cfg.sensor_security =
+        wire::ClientSecurity{own, load("sensor_public_key", wire::load_public_key)};
+    cfg.arm_security = wire::ClientSecurity{own, load("arm_public_key", wire::load_public_key)};
+  }
   return cfg;
 }
 

@@ -2,12 +2,14 @@
 
 #include <array>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "tactile/calibration.hpp"
 #include "tactile/control/config.hpp"
 #include "tactile/control/types.hpp"
+#include "tactile/wire/security.hpp"
 
 namespace tactile::hand {
 
@@ -30,6 +32,9 @@ struct HandConfig {
   double control_period_s = 0.005;  // the controller also runs this often without new frames
   double arm_timeout_s = 1.0;       // no ArmState for this long: the arm controller is gone
   control::Config controller;
+  // CURVE on both links (docs/security.md); unset: plain TCP.
+  std::optional<wire::ClientSecurity> sensor_security;  // SUB: the sensor_node's public key
+  std::optional<wire::ClientSecurity> arm_security;     // DEALER: the arm controller's public key
 };
 
 // Loads and checks the file; throws config::ConfigError naming file, line, key and value.

@@ -24,8 +24,9 @@ std::int64_t seconds_to_ns(double s) {
 HandNode::HandNode(HandConfig cfg, zmq::context_t& ctx)
     : cfg_(std::move(cfg)),
       ids_{cfg_.fingertips[0].sensor_id, cfg_.fingertips[1].sensor_id},
-      sub_(ctx, cfg_.subscribe, {"frame/" + ids_[0], "frame/" + ids_[1]}),
-      arm_(ctx, cfg_.arm),
+      sub_(ctx, cfg_.subscribe, {"frame/" + ids_[0], "frame/" + ids_[1]},
+           cfg_.sensor_security ? &*cfg_.sensor_security : nullptr),
+      arm_(ctx, cfg_.arm, cfg_.arm_security ? &*cfg_.arm_security : nullptr),
       controller_(cfg_.controller) {
   if (!cfg_.events.empty()) events_.emplace(ctx, cfg_.events);
   for (std::size_t i = 0; i < control::kFingertips; ++i) {

@@ -21,7 +21,9 @@ namespace tactile::sensor {
 // at once; the lock is held only for the send).
 class SharedPublisher {
  public:
-  SharedPublisher(zmq::context_t& ctx, const std::string& endpoint) : pub_(ctx, endpoint) {}
+  SharedPublisher(zmq::context_t& ctx, const std::string& endpoint,
+                  const wire::ServerSecurity* security)
+      : pub_(ctx, endpoint, security) {}
   void send(std::string_view topic, std::span<const std::uint8_t> payload) {
     std::lock_guard lock(mutex_);
     pub_.send(topic, payload);

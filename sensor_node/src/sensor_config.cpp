@@ -38,7 +38,7 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
     for (const auto& k : n.unknown_keys(known))
       warnings->push_back(path.string() + ": unknown key '" + k + "' ignored");
   };
-  warn(root, {"format", "publish", "stats_period_s", "measurement", "cameras"});
+  warn(root, {"format", "publish", "stats_period_s", "measurement", "cameras", "security"});
   const config::Node format = root["format"];
   if (format.as_string() != kSensorConfigFormat) {
     format.fail(std::string("must be '") + kSensorConfigFormat + "', is " + format.text());
@@ -63,6 +63,16 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
     if (gap < 1 || gap > 1000)
       (*m)["max_gap_frames"].fail("must be 1..1000, is " + (*m)["max_gap_frames"].text());
     cfg.measurement.max_gap_frames = static_cast<std::uint32_t>(gap);
+  }
+  if (auto sec = root.find("security")) {
+    warn(*sec, {"secret_key"});
+    const config::Node key = (*sec)["secret_key"];
+    try {
+      cfg.security =
+          wire::ServerSecurity{wire::load_key_pair(path.parent_path() / key.as_string()), {}};
+    } catch (const std::runtime_error& e) {
+      key.fail(e.what());
+    }
   }
   const config::Node cams = root["cameras"];
   if (cams.size() == 0) cams.fail("must list at least one camera");

@@ -1,12 +1,14 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "tactile/calibration.hpp"
 #include "tactile/camera/aravis_camera.hpp"
 #include "tactile/extractor.hpp"
+#include "tactile/wire/security.hpp"
 
 namespace tactile::sensor {
 
@@ -30,6 +32,8 @@ struct SensorConfig {
   double stats_period_s = 1.0;
   ExtractorOptions measurement;
   std::vector<CameraConfig> cameras;
+  // CURVE on the PUB socket (docs/security.md); unset: plain TCP.
+  std::optional<wire::ServerSecurity> security;
 };
 
 SensorConfig default_sensor_config();

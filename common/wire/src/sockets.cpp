@@ -80,9 +80,11 @@ unsigned poll_readable(std::span<zmq::socket_ref> sockets, std::chrono::millisec
   return mask;
 }
 
-Publisher::Publisher(zmq::context_t& ctx, const std::string& endpoint)
+Publisher::Publisher(zmq::context_t& ctx, const std::string& endpoint,
+                     const ServerSecurity* security)
     : socket_(ctx, zmq::socket_type::pub) {
   common_options(socket_);
+  if (security != nullptr) apply_server_security(socket_, *security);
   bind_or_throw(socket_, "PUB", endpoint);
 }
 
@@ -97,9 +99,10 @@ std::string Publisher::endpoint() const {
 }
 
 Subscriber::Subscriber(zmq::context_t& ctx, const std::vector<std::string>& endpoints,
-                       const std::vector<std::string>& topics)
+                       const std::vector<std::string>& topics, const ClientSecurity* security)
     : socket_(ctx, zmq::socket_type::sub) {
   common_options(socket_);
+  if (security != nullptr) apply_client_security(socket_, *security);
   receiving_options(socket_);
   for (const auto& t : topics)
     socket_.set(zmq::sockopt::subscribe, t);
@@ -127,9 +130,10 @@ bool Subscriber::receive(TopicMessage& out, std::chrono::milliseconds timeout) {
   return true;
 }
 
-Dealer::Dealer(zmq::context_t& ctx, const std::string& endpoint)
+Dealer::Dealer(zmq::context_t& ctx, const std::string& endpoint, const ClientSecurity* security)
     : socket_(ctx, zmq::socket_type::dealer) {
   common_options(socket_);
+  if (security != nullptr) apply_client_security(socket_, *security);
   receiving_options(socket_);
   socket_.set(zmq::sockopt::sndhwm, 100);
   connect_or_throw(socket_, "DEALER", endpoint);
@@ -153,9 +157,15 @@ bool Dealer::receive(std::vector<std::uint8_t>& payload, std::chrono::millisecon
   return true;
 }
 
-Router::Router(zmq::context_t& ctx, const std::string& endpoint)
+Router::Router(zmq::context_t& ctx, const std::string& endpoint, const ServerSecurity* security)
     : socket_(ctx, zmq::socket_type::router) {
   common_options(socket_);
+  if (security != nullptr) {
+    if (!security->authorized_clients.empty()) {
+      auth_ = std::make_unique<CurveAuthenticator>(ctx, security->authorized_clients);
+    }
+    apply_server_security(socket_, *security);
+  }
   receiving_options(socket_);
   // Sending to a peer that is gone fails instead of vanishing silently.
   socket_.set(zmq::sockopt::router_mandatory, true);

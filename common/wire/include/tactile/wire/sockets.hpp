@@ -4,11 +4,14 @@
 // real failures (a bad endpoint, a port in use) throw std::runtime_error naming the endpoint.
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 #include <zmq.hpp>
+
+#include "tactile/wire/security.hpp"
 
 namespace tactile::wire {
 
@@ -19,7 +22,9 @@ unsigned poll_readable(std::span<zmq::socket_ref> sockets, std::chrono::millisec
 // PUB side of a tactile, event or ground-truth stream.
 class Publisher {
  public:
-  Publisher(zmq::context_t& ctx, const std::string& endpoint);
+  // With `security`, a CURVE server: only subscribers that know its public key receive.
+  Publisher(zmq::context_t& ctx, const std::string& endpoint,
+            const ServerSecurity* security = nullptr);
   // Sends [topic, payload]. Never blocks: past the high-water mark a PUB socket drops.
   void send(std::string_view topic, std::span<const std::uint8_t> payload);
   // The endpoint actually bound (a wildcard port resolved), e.g. "tcp://0.0.0.0:5555".
@@ -37,8 +42,10 @@ struct TopicMessage {
 // SUB side: connects to one or more publishers and subscribes to topic prefixes.
 class Subscriber {
  public:
+  // With `security`, a CURVE client: it accepts data only from publishers holding the secret
+  // key of `security->server_public_z85`.
   Subscriber(zmq::context_t& ctx, const std::vector<std::string>& endpoints,
-             const std::vector<std::string>& topics);
+             const std::vector<std::string>& topics, const ClientSecurity* security = nullptr);
   // Waits up to `timeout` for one [topic, payload] message. A message of another shape is
   // dropped and counted (malformed()). Messages larger than kMaxMessageBytes never arrive.
   bool receive(TopicMessage& out, std::chrono::milliseconds timeout);
@@ -53,7 +60,8 @@ class Subscriber {
 // hand_node's side of the arm link.
 class Dealer {
  public:
-  Dealer(zmq::context_t& ctx, const std::string& endpoint);
+  Dealer(zmq::context_t& ctx, const std::string& endpoint,
+         const ClientSecurity* security = nullptr);
   // False when it would block (the arm controller is absent and the queue is full).
   bool send(std::span<const std::uint8_t> payload);
   bool receive(std::vector<std::uint8_t>& payload, std::chrono::milliseconds timeout);
@@ -68,7 +76,12 @@ class Dealer {
 // The arm controller's side of the arm link.
 class Router {
  public:
-  Router(zmq::context_t& ctx, const std::string& endpoint);
+  // With `security`, a CURVE server that lets in only the authorized client keys (it runs the
+  // context's authenticator: one secured Router per context).
+  Router(zmq::context_t& ctx, const std::string& endpoint,
+         const ServerSecurity* security = nullptr);
+  // Clients refused by the authenticator (0 without security).
+  std::uint64_t refused_clients() const { return auth_ ? auth_->refused() : 0; }
   // Receives one message and the identity of the peer that sent it.
   bool receive(std::string& peer, std::vector<std::uint8_t>& payload,
                std::chrono::milliseconds timeout);
@@ -79,6 +92,7 @@ class Router {
   zmq::socket_ref socket() { return socket_; }
 
  private:
+  std::unique_ptr<CurveAuthenticator> auth_;
   zmq::socket_t socket_;
   std::uint64_t malformed_ = 0;
 };
