@@ -74,7 +74,8 @@ class FakeGvCamera {
   double gvsp_lost_ratio() const noexcept;
 
   // Called on the camera thread for every frame, after the copy and before its packets are
-  // sent. Keep it short: that thread also answers GVCP. Replaces any previous observer.
+  // sent. Keep it short: that thread also answers GVCP. An exception it throws is swallowed
+  // (it cannot cross Aravis's C code). Replaces any previous observer.
   using SentObserver = std::function<void(const SentFrame&)>;
   void set_sent_observer(SentObserver observer);
   SentFrame last_sent() const noexcept;
