@@ -4,12 +4,15 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <set>
+#include <thread>
 
+#include "garbage.hpp"
 #include "process.hpp"
 #include "synthetic.hpp"
 #include "tactile/config/calibration_file.hpp"
@@ -180,6 +183,13 @@ struct Injection {
 };
 using Script = std::function<Injection(const SimWorld&, int frame)>;
 
+// Bad input sent while a run goes on: on the tactile stream from a second publisher, and on the
+// arm link after every ArmState.
+struct Flood {
+  std::uint64_t tactile_messages = 0;
+  std::uint64_t arm_messages_per_frame = 0;
+};
+
 class HandNodeRun {
  public:
   explicit HandNodeRun(std::string controller_yaml = "") {
@@ -198,13 +208,52 @@ class HandNodeRun {
   }
 
   RunResult run(const Script& script, std::chrono::milliseconds limit,
-                int sigterm_after_commands = -1) {
+                int sigterm_after_commands = -1, Flood flood = {}) {
     zmq::context_t ctx;
     wire::Router arm(ctx, "tcp://127.0.0.1:*");
     wire::Publisher sensors(ctx, "tcp://127.0.0.1:*");
     const std::string events_endpoint = "ipc://" + (dir_ / "events").string();
-    Process hand({TACTILE_HAND_NODE_PATH, "--config", (dir_ / "hand.yaml").string(), "--subscribe",
-                  sensors.endpoint(), "--arm", arm.endpoint(), "--events", events_endpoint});
+    std::vector<std::string> args{
+        TACTILE_HAND_NODE_PATH, "--config",         (dir_ / "hand.yaml").string(),
+        "--subscribe",          sensors.endpoint(), "--arm",
+        arm.endpoint(),         "--events",         events_endpoint};
+    // A valid frame to mutate.
+    std::string valid;
+    {
+      v1::Envelope e;
+      std::vector<ElementReading> rs(cals_[0].elements.size());
+      for (std::size_t i = 0; i < rs.size(); ++i)
+        rs[i].id = cals_[0].elements[i].id;
+      wire::FrameHeader h;
+      h.status = v1::FRAME_STATUS_COMPLETE;
+      wire::fill_tactile_frame(kIds[0], h, rs, cals_[0].mm_per_px, *e.mutable_tactile_frame());
+      wire::encode(e, valid);
+    }
+    zmq::socket_t flooder(ctx, zmq::socket_type::pub);
+    flooder.set(zmq::sockopt::sndhwm, 0);
+    flooder.set(zmq::sockopt::linger, 0);
+    std::thread flood_thread;
+    std::atomic<bool> flood_stop{false};
+    if (flood.tactile_messages > 0) {
+      flooder.bind("tcp://127.0.0.1:*");
+      args.push_back("--subscribe");
+      args.push_back(flooder.get(zmq::sockopt::last_endpoint));
+    }
+    Process hand(args);
+    if (flood.tactile_messages > 0) {
+      flood_thread = std::thread([&] {
+        testing::Garbage g(valid, 7);
+        for (std::uint64_t i = 0; i < flood.tactile_messages && !flood_stop; ++i) {
+          const std::string m = g.next();
+          flooder.send(zmq::buffer(kIds[i % 2] == "left" ? std::string("frame/left")
+                                                         : std::string("frame/right")),
+                       zmq::send_flags::sndmore);
+          flooder.send(zmq::buffer(m), zmq::send_flags::none);
+          if (i % 1000 == 999) std::this_thread::sleep_for(5ms);  // spread over the run
+        }
+      });
+    }
+    testing::Garbage arm_garbage(valid, 11);
     wire::Subscriber events(ctx, {events_endpoint}, {"event"});
 
     SimWorld world(cals_);
@@ -282,8 +331,12 @@ class HandNodeRun {
         wire::fill_arm_state(world.state(last_command), kIds, *env.mutable_arm_state());
         wire::encode(env, out);
         arm.send(peer, bytes(out));
+        for (std::uint64_t i = 0; i < flood.arm_messages_per_frame; ++i)
+          arm.send(peer, bytes(arm_garbage.next()));
       }
     }
+    flood_stop = true;
+    if (flood_thread.joinable()) flood_thread.join();
     r.process = hand.wait(5s);
     // Late events and commands (Stop on the way out).
     while (events.receive(ev, 50ms)) {
@@ -391,6 +444,26 @@ TEST(HandNode, HoldsOnStaleDataAndResumes) {
   // The task went on after resuming: lowering without a bottle to meet ends it aborted (exit 3).
   EXPECT_EQ(r.events.back(), v1::EVENT_KIND_ABORTED);
   EXPECT_EQ(r.process.exit_code, 3);
+}
+
+std::uint64_t logged_count(const std::string& log, const std::string& what) {
+  const auto at = log.rfind(what + " ");
+  return at == std::string::npos ? 0 : std::stoull(log.substr(at + what.size() + 1));
+}
+
+TEST(HandNode, KeepsWorkingUnderAFloodOfBadMessages) {
+  HandNodeRun run;
+  Flood flood;
+  flood.tactile_messages = 100'000;
+  flood.arm_messages_per_frame = 30;
+  const RunResult r = run.run(paper_story, 60s, -1, flood);
+  ASSERT_FALSE(r.process.timed_out) << r.process.err;
+  // The task completes as without the flood: the good messages kept flowing.
+  EXPECT_EQ(r.process.exit_code, 0) << r.process.err;
+  EXPECT_EQ(r.events.back(), v1::EVENT_KIND_DONE);
+  EXPECT_NE(std::find(r.events.begin(), r.events.end(), v1::EVENT_KIND_CAP_TIGHT), r.events.end());
+  // And the bad ones were seen and counted, not acted on.
+  EXPECT_GT(logged_count(r.process.err, "undecodable"), 50'000U) << r.process.err;
 }
 
 TEST(HandNode, SendsStopOnSigterm) {
