@@ -1,7 +1,6 @@
 // rig: the simulated rig (docs/rig.md). `rig --lockstep --scenario FILE --report FILE.json` runs
 // the scenario in one process on simulated time; the real-time mode is not built yet.
 #include <CLI/CLI.hpp>
-
 #include <chrono>
 #include <cstdio>
 #include <exception>
@@ -82,17 +81,16 @@ int run(int argc, char** argv) {
     std::fputs(json.c_str(), stdout);
   }
   if (!timing_path.empty()) {
-    tactile::util::write_file_atomic(
-        timing_path, fmt::format("{{\"wall_s\": {:.4f}, \"sim_time_s\": {:.4f}, "
-                                 "\"wall_over_sim\": {:.5f}}}\n",
-                                 wall_s, result.report.sim_time_s, ratio));
+    tactile::util::write_file_atomic(timing_path,
+                                     fmt::format("{{\"wall_s\": {:.4f}, \"sim_time_s\": {:.4f}, "
+                                                 "\"wall_over_sim\": {:.5f}}}\n",
+                                                 wall_s, result.report.sim_time_s, ratio));
   }
   if (!series_path.empty()) {
     tactile::util::write_file_atomic(series_path, tactile::rig::series_csv(result.series));
     std::filesystem::path mismatch_path(series_path);
     mismatch_path.replace_extension(".mismatches.csv");
-    tactile::util::write_file_atomic(mismatch_path,
-                                     tactile::rig::mismatches_csv(result.series));
+    tactile::util::write_file_atomic(mismatch_path, tactile::rig::mismatches_csv(result.series));
   }
   if (!plots_dir.empty()) {
     for (const auto& path : tactile::rig::write_plots(result, plots_dir))

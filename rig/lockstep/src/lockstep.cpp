@@ -1,5 +1,7 @@
 #include "tactile/rig/lockstep.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -11,8 +13,6 @@
 #include "tactile/rig/optics.hpp"
 #include "tactile/rig/world.hpp"
 #include "tactile/util/json.hpp"
-
-#include <fmt/format.h>
 
 namespace tactile::rig {
 namespace {
@@ -26,36 +26,66 @@ control::Config controller_config(const Scenario& sc) {
   cfg.tighten_clockwise = sc.world.bottle.tighten_clockwise;
   for (const auto& [key, v] : sc.controller) {
     const auto count = static_cast<std::uint32_t>(std::max(0.0, std::round(v)));
-    if (key == "f1_n") cfg.f1_n = v;
-    else if (key == "f2_n") cfg.f2_n = v;
-    else if (key == "dr_mm") cfg.dr_mm = v;
-    else if (key == "twist_dr_factor") cfg.twist_dr_factor = v;
-    else if (key == "approach_speed_mps") cfg.approach_speed_mps = v;
-    else if (key == "recompress_gain_mps") cfg.recompress_gain_mps = v;
-    else if (key == "recompress_duration_s") cfg.recompress_duration_s = v;
-    else if (key == "backoff_speed_mps") cfg.backoff_speed_mps = v;
-    else if (key == "max_finger_speed_mps") cfg.max_finger_speed_mps = v;
-    else if (key == "safe_height_m") cfg.safe_height_m = v;
-    else if (key == "grasp_height_m") cfg.grasp_height_m = v;
-    else if (key == "carry_height_m") cfg.carry_height_m = v;
-    else if (key == "lower_limit_m") cfg.lower_limit_m = v;
-    else if (key == "retract_height_m") cfg.retract_height_m = v;
-    else if (key == "move_speed_mps") cfg.move_speed_mps = v;
-    else if (key == "lift_speed_mps") cfg.lift_speed_mps = v;
-    else if (key == "carry_speed_mps") cfg.carry_speed_mps = v;
-    else if (key == "lower_speed_mps") cfg.lower_speed_mps = v;
-    else if (key == "max_yaw_rate_rps") cfg.max_yaw_rate_rps = v;
-    else if (key == "twist_yaw_rate_rps") cfg.twist_yaw_rate_rps = v;
-    else if (key == "grasp_settle_s") cfg.grasp_settle_s = v;
-    else if (key == "open_speed_mps") cfg.open_speed_mps = v;
-    else if (key == "open_distance_m") cfg.open_distance_m = v;
-    else if (key == "open_settle_s") cfg.open_settle_s = v;
-    else if (key == "twist_angle_deg") cfg.twist_angle_rad = v * std::numbers::pi / 180.0;
-    else if (key == "ns") cfg.ns = count;
-    else if (key == "cycle_slip_min") cfg.cycle_slip_min = count;
-    else if (key == "max_twist_cycles") cfg.max_twist_cycles = count;
-    else if (key == "search_timeout_s") cfg.search_timeout_s = v;
-    else if (key == "segment_timeout_s") cfg.segment_timeout_s = v;
+    if (key == "f1_n")
+      cfg.f1_n = v;
+    else if (key == "f2_n")
+      cfg.f2_n = v;
+    else if (key == "dr_mm")
+      cfg.dr_mm = v;
+    else if (key == "twist_dr_factor")
+      cfg.twist_dr_factor = v;
+    else if (key == "approach_speed_mps")
+      cfg.approach_speed_mps = v;
+    else if (key == "recompress_gain_mps")
+      cfg.recompress_gain_mps = v;
+    else if (key == "recompress_duration_s")
+      cfg.recompress_duration_s = v;
+    else if (key == "backoff_speed_mps")
+      cfg.backoff_speed_mps = v;
+    else if (key == "max_finger_speed_mps")
+      cfg.max_finger_speed_mps = v;
+    else if (key == "safe_height_m")
+      cfg.safe_height_m = v;
+    else if (key == "grasp_height_m")
+      cfg.grasp_height_m = v;
+    else if (key == "carry_height_m")
+      cfg.carry_height_m = v;
+    else if (key == "lower_limit_m")
+      cfg.lower_limit_m = v;
+    else if (key == "retract_height_m")
+      cfg.retract_height_m = v;
+    else if (key == "move_speed_mps")
+      cfg.move_speed_mps = v;
+    else if (key == "lift_speed_mps")
+      cfg.lift_speed_mps = v;
+    else if (key == "carry_speed_mps")
+      cfg.carry_speed_mps = v;
+    else if (key == "lower_speed_mps")
+      cfg.lower_speed_mps = v;
+    else if (key == "max_yaw_rate_rps")
+      cfg.max_yaw_rate_rps = v;
+    else if (key == "twist_yaw_rate_rps")
+      cfg.twist_yaw_rate_rps = v;
+    else if (key == "grasp_settle_s")
+      cfg.grasp_settle_s = v;
+    else if (key == "open_speed_mps")
+      cfg.open_speed_mps = v;
+    else if (key == "open_distance_m")
+      cfg.open_distance_m = v;
+    else if (key == "open_settle_s")
+      cfg.open_settle_s = v;
+    else if (key == "twist_angle_deg")
+      cfg.twist_angle_rad = v * std::numbers::pi / 180.0;
+    else if (key == "ns")
+      cfg.ns = count;
+    else if (key == "cycle_slip_min")
+      cfg.cycle_slip_min = count;
+    else if (key == "max_twist_cycles")
+      cfg.max_twist_cycles = count;
+    else if (key == "search_timeout_s")
+      cfg.search_timeout_s = v;
+    else if (key == "segment_timeout_s")
+      cfg.segment_timeout_s = v;
   }
   cfg.validate();
   return cfg;
@@ -126,9 +156,9 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
 
   const control::Config cfg = controller_config(sc);
   World world(sc.world);
-  const int steps = opt.dt_s > 0 ? std::max(1, static_cast<int>(std::lround(
-                                                   1.0 / (sc.camera.fps * opt.dt_s))))
-                                 : sc.steps_per_frame();
+  const int steps =
+      opt.dt_s > 0 ? std::max(1, static_cast<int>(std::lround(1.0 / (sc.camera.fps * opt.dt_s))))
+                   : sc.steps_per_frame();
   const double dt = 1.0 / (sc.camera.fps * steps);
   rep.physics_step_s = dt;
 
@@ -397,8 +427,8 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
     world.apply(to_arm_command(out.command));
     phase = out.phase;
     twist_cycle = out.twist_cycle;
-    rep.twist_cycles = static_cast<int>(std::max<std::uint32_t>(
-        static_cast<std::uint32_t>(rep.twist_cycles), out.twist_cycle));
+    rep.twist_cycles = static_cast<int>(
+        std::max<std::uint32_t>(static_cast<std::uint32_t>(rep.twist_cycles), out.twist_cycle));
     rep.final_cap_angle_deg = gt.cap_angle_deg;
     if (gt.dropped && dropped_at < 0) dropped_at = t;
 
@@ -457,8 +487,7 @@ std::string series_csv(const RunSeries& series) {
     for (std::size_t i = 0; i < kFingertips; ++i) {
       o += fmt::format(",{:.6f},{:.5f},{:.4f},{:.4f},{:d},{:d},{:d},{:d},{},{},{}",
                        f.fingertip_x_m[i], f.dy_mm[i], f.max_fz_measured[i], f.max_fz_true[i],
-                       f.touch[i], f.slip[i], f.true_slip[i], f.over[i], f.tp[i], f.fp[i],
-                       f.fn[i]);
+                       f.touch[i], f.slip[i], f.true_slip[i], f.over[i], f.tp[i], f.fp[i], f.fn[i]);
     }
     o += "\n";
   }
@@ -470,10 +499,11 @@ std::string mismatches_csv(const RunSeries& series) {
       "t,fingertip,element,measured_slip,measured_d_mm,measured_fz,true_sliding,true_fz,"
       "releases,slip_mm,surface_mm,load_ratio,ux_mm,uy_mm\n";
   for (const Mismatch& m : series.mismatches) {
-    o += fmt::format("{:.3f},{},{},{:d},{:.5f},{:.4f},{:d},{:.4f},{},{:.5f},{:.5f},{:.3f},{:.5f},{:.5f}\n",
-                     m.t, m.fingertip, m.element, m.measured_slip, m.measured_d_mm, m.measured_fz,
-                     m.truth.sliding, m.truth.fz_n, m.truth.releases, m.truth.slip_mm,
-                     m.truth.surface_mm, m.truth.load_ratio, m.truth.ux_mm, m.truth.uy_mm);
+    o += fmt::format(
+        "{:.3f},{},{},{:d},{:.5f},{:.4f},{:d},{:.4f},{},{:.5f},{:.5f},{:.3f},{:.5f},{:.5f}\n", m.t,
+        m.fingertip, m.element, m.measured_slip, m.measured_d_mm, m.measured_fz, m.truth.sliding,
+        m.truth.fz_n, m.truth.releases, m.truth.slip_mm, m.truth.surface_mm, m.truth.load_ratio,
+        m.truth.ux_mm, m.truth.uy_mm);
   }
   return o;
 }

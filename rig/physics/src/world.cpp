@@ -156,28 +156,26 @@ void World::update_arm(double dt) noexcept {
   if (has_move_ && !arm_.segment_done) {
     const Vec3 r = move_.target_position_m - arm_.position_m;
     const double dist = norm(r);
-    Vec3 v_des{};
-    if (dist > 0) {
-      const double speed = std::min(move_.max_speed_mps, std::sqrt(2.0 * a * dist));
-      v_des = (speed / dist) * r;
-    }
-    arm_.velocity_mps = arm_.velocity_mps + clamp_norm(v_des - arm_.velocity_mps, a * dt);
     const double yaw_left = move_.target_yaw_rad - arm_.yaw_rad;
-    arm_.yaw_rate_rps = approach_1d(yaw_left, arm_.yaw_rate_rps, move_.max_yaw_rate_rps,
-                                    p_.arm.max_yaw_accel_rps2, dt);
-    arm_.position_m = arm_.position_m + dt * arm_.velocity_mps;
-    arm_.yaw_rad += dt * arm_.yaw_rate_rps;
-    // Arrived: within one step's travel of the target and slow enough to stop in one step.
-    const Vec3 r_after = move_.target_position_m - arm_.position_m;
-    const double yaw_after = move_.target_yaw_rad - arm_.yaw_rad;
-    if (norm(r_after) <= 1e-6 && norm(arm_.velocity_mps) <= 2.0 * a * dt &&
-        std::abs(yaw_after) <= 1e-5 &&
-        std::abs(arm_.yaw_rate_rps) <= 2.0 * p_.arm.max_yaw_accel_rps2 * dt) {
+    // Arrived: close enough, and slow enough to stop within this step's acceleration bound.
+    if (dist <= 1e-6 && norm(arm_.velocity_mps) <= a * dt && std::abs(yaw_left) <= 1e-5 &&
+        std::abs(arm_.yaw_rate_rps) <= p_.arm.max_yaw_accel_rps2 * dt) {
       arm_.position_m = move_.target_position_m;
       arm_.yaw_rad = move_.target_yaw_rad;
       arm_.velocity_mps = {};
       arm_.yaw_rate_rps = 0;
       arm_.segment_done = true;
+    } else {
+      Vec3 v_des{};
+      if (dist > 0) {
+        const double speed = std::min(move_.max_speed_mps, std::sqrt(2.0 * a * dist));
+        v_des = (speed / dist) * r;
+      }
+      arm_.velocity_mps = arm_.velocity_mps + clamp_norm(v_des - arm_.velocity_mps, a * dt);
+      arm_.yaw_rate_rps = approach_1d(yaw_left, arm_.yaw_rate_rps, move_.max_yaw_rate_rps,
+                                      p_.arm.max_yaw_accel_rps2, dt);
+      arm_.position_m = arm_.position_m + dt * arm_.velocity_mps;
+      arm_.yaw_rad += dt * arm_.yaw_rate_rps;
     }
   } else {
     // Hold, Stop or no segment: brake to rest.

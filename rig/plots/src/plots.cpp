@@ -74,11 +74,12 @@ std::vector<std::filesystem::path> write_plots(const LockstepResult& run,
       s.line_width = 1;
       p.line(x, y, names[i], s);
     }
-    plot::Style dashed;
-    dashed.dashed = true;
-    dashed.color = plot::kGray;
-    p.hline(0.004, "dr", dashed);
-    p.hline(-0.004, "-dr", dashed);
+    // Solid thin lines: the plot library's dashes can stall on long segments (reported).
+    plot::Style thin;
+    thin.line_width = 1;
+    thin.color = plot::kGray;
+    p.hline(0.004, "dr", thin);
+    p.hline(-0.004, "-dr", thin);
     written.push_back(dir / "fig10.png");
     fig.save_png(written.back());
   }
@@ -87,8 +88,8 @@ std::vector<std::filesystem::path> write_plots(const LockstepResult& run,
   int n = 0;
   for (const Snapshot& snap : run.series.snapshots) {
     plot::Figure fig(1100, 560);
-    fig.title("Shear displacement u at t = " + std::to_string(snap.t).substr(0, 6) + " s: " +
-              snap.label + " (arrows x40; red: SLIP)");
+    fig.title("Shear displacement u at t = " + std::to_string(snap.t).substr(0, 6) +
+              " s: " + snap.label + " (arrows x40; red: SLIP)");
     for (std::size_t i = 0; i < kFingertips; ++i) {
       auto& p = fig.add_panel();
       p.title(std::string(names[i]) + " fingertip").equal_aspect().no_legend();
@@ -138,7 +139,6 @@ std::vector<std::filesystem::path> write_plots(const LockstepResult& run,
       plot::Style s;
       s.line_width = 1;
       forces.line(t, m, std::string(names[i]) + " measured", s);
-      s.dashed = true;
       forces.line(t, tr, std::string(names[i]) + " true", s);
     }
     auto& flags = fig.add_panel(1.2);
@@ -170,7 +170,6 @@ std::vector<std::filesystem::path> write_plots(const LockstepResult& run,
       if (!key_event(e.kind)) continue;
       plot::Style s;
       s.line_width = 1;
-      s.dashed = true;
       s.color = plot::kGray;
       fig.mark(e.t, event_text(e), s);
     }

@@ -162,9 +162,10 @@ Scenario parse_scenario(const std::string& text, const std::string& source) {
 
   // arm (required: vibration_mm, vibration_hz)
   const Node arm = root["arm"];
-  refuse_unknown(arm, {"vibration_mm", "vibration_hz", "vibration_rise_s", "vibration_full_speed_mps", "max_accel_mps2", "stop_decel_mps2",
-                       "max_yaw_accel_rps2", "stop_yaw_decel_rps2", "finger_accel_mps2", "finger_open_mm", "start_m",
-                       "start_yaw_deg"});
+  refuse_unknown(arm,
+                 {"vibration_mm", "vibration_hz", "vibration_rise_s", "vibration_full_speed_mps",
+                  "max_accel_mps2", "stop_decel_mps2", "max_yaw_accel_rps2", "stop_yaw_decel_rps2",
+                  "finger_accel_mps2", "finger_open_mm", "start_m", "start_yaw_deg"});
   ArmParams& ap = s.world.arm;
   ap.vibration_m = need(arm, "vibration_mm", 0.0, 5.0) / 1000.0;
   ap.vibration_hz = need(arm, "vibration_hz", 0.0, 200.0);

@@ -76,7 +76,6 @@ struct FrameSample {
   std::array<std::uint16_t, kFingertips> tp{}, fp{}, fn{};
 };
 
-
 struct EventRecord {
   double t = 0;
   std::uint8_t kind = 0;  // control::EventKind

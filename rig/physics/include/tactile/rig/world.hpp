@@ -37,9 +37,9 @@ struct CapParams {
 struct BottleParams {
   double x_m = 0.35;
   double y_m = 0.10;
-  double height_m = 0.18;                   // neck top above the table (the cap seats here)
-  double free_turn_deg = 240.0;             // the cap turns freely this far, then tightens
-  double free_torque_nm = 0.002;            // thread friction while turning freely
+  double height_m = 0.18;                    // neck top above the table (the cap seats here)
+  double free_turn_deg = 240.0;              // the cap turns freely this far, then tightens
+  double free_torque_nm = 0.002;             // thread friction while turning freely
   double tight_stiffness_nm_per_rad = 50.0;  // slope of the rising torque past free_turn
   double capture_radius_m = 0.004;  // the neck's chamfer centres a cap this close to its axis
   bool tighten_clockwise = true;    // seen from above (yaw decreasing): a right-hand thread
@@ -50,12 +50,12 @@ struct ArmParams {
   double stop_decel_mps2 = 2.0;       // Hold and Stop brake the wrist this hard
   double max_yaw_accel_rps2 = 2.0;    // bound on the wrist's angular acceleration
   double stop_yaw_decel_rps2 = 20.0;  // Hold and Stop brake the wrist's turn this hard
-  double vibration_m = 0.0002;      // amplitude of the vertical wrist vibration
+  double vibration_m = 0.0002;        // amplitude of the vertical wrist vibration
   double vibration_hz = 12.0;
-  double vibration_rise_s = 0.05;     // the vibration follows the arm's speed this fast
+  double vibration_rise_s = 0.05;          // the vibration follows the arm's speed this fast
   double vibration_full_speed_mps = 0.05;  // the amplitude is reached at this wrist speed
-  double finger_accel_mps2 = 1.0;  // bound on each fingertip's acceleration
-  double finger_open_m = 0.008;    // initial gap between each fingertip and the cap surface
+  double finger_accel_mps2 = 1.0;          // bound on each fingertip's acceleration
+  double finger_open_m = 0.008;            // initial gap between each fingertip and the cap surface
   Vec3 start_position_m{0.35, -0.10, 0.25};  // initial grasp centre
   double start_yaw_rad = 0.0;
 };

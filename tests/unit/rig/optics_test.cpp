@@ -1,0 +1,157 @@
+// Optics (docs/rig.md): the rig's calibration, rendering through the inverse curves measured
+// back by the real extractor, honest noise statistics, redrawing only what changed.
+#include "tactile/rig/optics.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "tactile/config/calibration_file.hpp"
+#include "tactile/extractor.hpp"
+#include "tactile/rig/world.hpp"
+
+namespace tactile::rig {
+namespace {
+
+Calibration calibration(const CameraParams& cam) {
+  World w{WorldParams{}};
+  const auto normals = w.element_normals();
+  return make_calibration("left", cam, SensorOpticsParams{}, normals);
+}
+
+TEST(Optics, CalibrationHas41ElementsOnRingsAndRoundTrips) {
+  CameraParams cam;
+  const Calibration cal = calibration(cam);
+  ASSERT_EQ(cal.elements.size(), 41U);
+  EXPECT_NEAR(cal.elements[0].center_px.x, 319.5, 1e-9);
+  EXPECT_NEAR(cal.elements[0].normal.z, 1.0, 1e-12);
+  for (const ElementCalibration& e : cal.elements)
+    EXPECT_NEAR(norm(e.normal), 1.0, 1e-12);
+  // Ring 3 sits 180 px from the centre.
+  EXPECT_NEAR(norm(cal.elements[40].center_px - cal.elements[0].center_px), 180.0, 1e-9);
+  const Calibration back = config::parse_calibration(config::format_calibration(cal), "rt");
+  EXPECT_EQ(back.elements.size(), 41U);
+  EXPECT_EQ(back.normal_curve.x().back(), cal.normal_curve.x().back());
+}
+
+class RenderMeasure : public ::testing::TestWithParam<int> {};
+
+TEST_P(RenderMeasure, ExtractorMeasuresWhatWasRendered) {
+  CameraParams cam;
+  cam.bit_depth = GetParam();
+  const Calibration cal = calibration(cam);
+  Renderer r(cal, cam, SensorOpticsParams{}, 11);
+  Extractor ex(cal);
+  util::Random rng(3);
+  Image img;
+  std::vector<ElementLoad> loads(41);
+  ex.begin_reference();
+  for (int k = 0; k < 16; ++k) {
+    r.render(loads, rng, img);
+    ex.add_reference_frame(img.view());
+  }
+  ASSERT_TRUE(ex.has_reference());
+  const std::vector<double> forces{0.1, 0.3, 0.8, 1.5, 2.5};
+  double sq = 0;
+  int n = 0;
+  for (int frame = 0; frame < 20; ++frame) {
+    for (std::size_t k = 0; k < loads.size(); ++k) {
+      const auto kd = static_cast<double>(k);
+      loads[k] = {forces[k % forces.size()], 0.01 * std::sin(kd + frame * 0.1),
+                  -0.02 * std::cos(kd * 0.7)};
+    }
+    r.render(loads, rng, img);
+    ASSERT_EQ(ex.measure(img.view(), {static_cast<std::uint64_t>(frame + 1), 0}),
+              MeasureStatus::kOk);
+    for (std::size_t k = 0; k < loads.size(); ++k) {
+      const ElementReading& m = ex.readings()[k];
+      ASSERT_TRUE(m.contact) << k;
+      sq += (m.fz - loads[k].fz_n) * (m.fz - loads[k].fz_n);
+      ++n;
+      EXPECT_NEAR(m.ux_mm, loads[k].ux_mm, 0.0015) << k;
+      EXPECT_NEAR(m.uy_mm, loads[k].uy_mm, 0.0015) << k;
+    }
+  }
+  // Normal force within 1 % of the curve's full scale (3 N), RMS.
+  EXPECT_LT(std::sqrt(sq / n), 0.03);
+}
+
+INSTANTIATE_TEST_SUITE_P(BitDepths, RenderMeasure, ::testing::Values(8, 16));
+
+TEST(Optics, NoiseHasTheStatedStatistics) {
+  CameraParams cam;
+  cam.noise_sigma = 3.0;
+  cam.shot_noise_gain = 0;
+  const Calibration cal = calibration(cam);
+  Renderer r(cal, cam, SensorOpticsParams{}, 5);
+  util::Random rng(9);
+  Image img;
+  std::vector<ElementLoad> loads(41);
+  // Pixels of the centre element's disk, over many frames: mean, sigma, frame-to-frame
+  // correlation.
+  const int frames = 400;
+  const Vec2 c = cal.elements[0].center_px;
+  std::vector<int> xs;
+  std::vector<int> ys;
+  for (int dy = -10; dy <= 10; dy += 2)
+    for (int dx = -10; dx <= 10; dx += 2) {
+      xs.push_back(static_cast<int>(c.x) + dx);
+      ys.push_back(static_cast<int>(c.y) + dy);
+    }
+  std::vector<double> sum(xs.size()), sum2(xs.size()), lag(xs.size()), prev(xs.size());
+  for (int f = 0; f < frames; ++f) {
+    r.render(loads, rng, img);
+    for (std::size_t i = 0; i < xs.size(); ++i) {
+      const double v = img.get(xs[i], ys[i]) - r.background_at(xs[i], ys[i]);
+      sum[i] += v;
+      sum2[i] += v * v;
+      if (f > 0) lag[i] += v * prev[i];
+      prev[i] = v;
+    }
+  }
+  double mean = 0, var = 0, corr = 0;
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    mean += sum[i] / frames;
+    var += sum2[i] / frames;
+    corr += lag[i] / (frames - 1);
+  }
+  const auto n = static_cast<double>(xs.size());
+  mean /= n;
+  var /= n;
+  corr /= n;
+  EXPECT_NEAR(mean, 0.0, 0.1);
+  // Rounding adds 1/12 to the variance.
+  EXPECT_NEAR(std::sqrt(var), std::sqrt(9.0 + 1.0 / 12), 0.1);
+  EXPECT_NEAR(corr / var, 0.0, 0.05);
+}
+
+TEST(Optics, OnlyChangedSpotsAreRedrawn) {
+  CameraParams cam;
+  const Calibration cal = calibration(cam);
+  Renderer r(cal, cam, SensorOpticsParams{}, 5);
+  util::Random rng(1);
+  Image img;
+  std::vector<ElementLoad> loads(41);
+  r.render(loads, rng, img);
+  EXPECT_EQ(r.redrawn_spots(), 41U);
+  r.render(loads, rng, img);
+  EXPECT_EQ(r.redrawn_spots(), 0U);
+  loads[3].fz_n = 0.4;
+  loads[7].uy_mm = 0.01;
+  r.render(loads, rng, img);
+  EXPECT_EQ(r.redrawn_spots(), 2U);
+}
+
+TEST(Optics, ExpectedGInvertsToTheStrength) {
+  CameraParams cam;
+  const Calibration cal = calibration(cam);
+  Renderer r(cal, cam, SensorOpticsParams{}, 5);
+  for (double p : {500.0, 3000.0, 12000.0, 30000.0}) {
+    EXPECT_NEAR(r.strength_for_g(5, r.expected_g(5, p)), p, 1e-6 * p + 1e-3);
+  }
+  EXPECT_EQ(r.strength_for_g(5, 0.0), 0.0);
+}
+
+}  // namespace
+}  // namespace tactile::rig

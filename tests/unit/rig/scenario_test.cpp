@@ -1,0 +1,96 @@
+// Scenario files (INTERFACES.md section 3, docs/rig.md): the bundled ones load, and every bad
+// file is refused with a message naming file, line, key and value.
+#include "tactile/rig/scenario.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "tactile/config/yaml.hpp"
+
+namespace tactile::rig {
+namespace {
+
+const std::string kMinimal = R"(format: tactile-scenario/1
+seed: 1
+camera: {fps: 100, width: 640, height: 480, bit_depth: 8, noise_sigma: 2.0}
+cap: {mass_kg: 0.010, radius_mm: 15.0, friction: 0.8}
+bottle: {free_turn_deg: 240.0}
+arm: {vibration_mm: 0.2, vibration_hz: 12.0}
+)";
+
+std::string error_of(const std::string& text) {
+  try {
+    parse_scenario(text, "s.yaml");
+  } catch (const config::ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Scenario, TheInterfaceKeysAreEnoughAndDefaultsFillTheRest) {
+  const Scenario s = parse_scenario(kMinimal, "s.yaml");
+  EXPECT_EQ(s.seed, 1U);
+  EXPECT_EQ(s.camera.fps, 100.0);
+  EXPECT_EQ(s.camera.bit_depth, 8);
+  EXPECT_DOUBLE_EQ(s.world.cap.radius_m, 0.015);
+  EXPECT_DOUBLE_EQ(s.world.arm.vibration_m, 0.0002);
+  EXPECT_DOUBLE_EQ(s.world.bottle.free_turn_deg, 240.0);
+  EXPECT_EQ(s.steps_per_frame(), 100);
+  EXPECT_TRUE(s.controller.empty());
+}
+
+TEST(Scenario, BundledScenariosLoad) {
+  const std::filesystem::path dir = TACTILE_RIG_SCENARIOS;
+  const Scenario d = load_scenario(dir / "default.yaml");
+  EXPECT_EQ(d.world.cap.mass_kg, 0.010);
+  int variations = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "variations")) {
+    EXPECT_NO_THROW(load_scenario(entry.path())) << entry.path();
+    ++variations;
+  }
+  EXPECT_EQ(variations, 10);
+}
+
+TEST(Scenario, ErrorsNameFileLineKeyAndValue) {
+  std::string e = error_of(kMinimal + "sim: {dt_s: 0.5}\n");
+  EXPECT_NE(e.find("s.yaml:7"), std::string::npos) << e;
+  EXPECT_NE(e.find("sim.dt_s"), std::string::npos) << e;
+  EXPECT_NE(e.find("0.5"), std::string::npos) << e;
+
+  std::string no_cap = kMinimal;
+  no_cap.replace(no_cap.find("cap:"), no_cap.find("bottle:") - no_cap.find("cap:"), "");
+  e = error_of(no_cap);
+  EXPECT_NE(e.find("'cap' is missing"), std::string::npos) << e;
+
+  std::string bad_depth = kMinimal;
+  bad_depth.replace(bad_depth.find("bit_depth: 8"), 12, "bit_depth: 12");
+  e = error_of(bad_depth);
+  EXPECT_NE(e.find("camera.bit_depth"), std::string::npos) << e;
+  EXPECT_NE(e.find("12"), std::string::npos) << e;
+
+  e = error_of(kMinimal + "cap_typo: 1\n");
+  EXPECT_NE(e.find("cap_typo"), std::string::npos) << e;
+  EXPECT_NE(e.find("unknown key"), std::string::npos) << e;
+
+  e = error_of(kMinimal + "controller: {f9_n: 1}\n");
+  EXPECT_NE(e.find("controller.f9_n"), std::string::npos) << e;
+
+  std::string bad_format = kMinimal;
+  bad_format.replace(0, bad_format.find('\n'), "format: tactile-scenario/2");
+  e = error_of(bad_format);
+  EXPECT_NE(e.find("s.yaml:1"), std::string::npos) << e;
+  EXPECT_NE(e.find("tactile-scenario/2"), std::string::npos) << e;
+}
+
+TEST(Scenario, ControllerOverridesAreKept) {
+  const Scenario s =
+      parse_scenario(kMinimal + "controller: {twist_yaw_rate_rps: 0.25, ns: 6}\n", "s.yaml");
+  ASSERT_EQ(s.controller.size(), 2U);
+  EXPECT_EQ(s.controller[0].first, "twist_yaw_rate_rps");
+  EXPECT_EQ(s.controller[1].second, 6.0);
+}
+
+}  // namespace
+}  // namespace tactile::rig

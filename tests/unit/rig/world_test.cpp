@@ -1,0 +1,311 @@
+// World physics (docs/rig.md): the arm's commands, stick-slip of the feelers, incipient before
+// gross slip, the bottle's thread, finiteness, and outcome independence from the step size,
+// driven by a small scripted hand instead of the controller.
+#include "tactile/rig/world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tactile/rig/truth.hpp"
+
+namespace tactile::rig {
+namespace {
+
+bool all_finite(const World& w) {
+  bool ok = is_finite(w.cap().position_m) && is_finite(w.cap().velocity_mps) &&
+            std::isfinite(w.cap().yaw_rad) && is_finite(w.arm().position_m);
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    for (const Element& e : w.fingertip(i).elements) {
+      ok = ok && std::isfinite(e.fn_n) && std::isfinite(e.s_mm[0]) && std::isfinite(e.s_mm[1]);
+    }
+  }
+  return ok;
+}
+
+double max_fn(const World& w, std::size_t i) {
+  double m = 0;
+  for (const Element& e : w.fingertip(i).elements)
+    m = std::max(m, e.fn_n);
+  return m;
+}
+
+ArmCommand move_to(std::uint32_t id, Vec3 p, double yaw = 0, double speed = 0.05,
+                   double yaw_rate = 0.5) {
+  ArmCommand c;
+  c.kind = CommandKind::kMoveTo;
+  c.segment_id = id;
+  c.target_position_m = p;
+  c.target_yaw_rad = yaw;
+  c.max_speed_mps = speed;
+  c.max_yaw_rate_rps = yaw_rate;
+  return c;
+}
+
+ArmCommand squeeze(double speed) {
+  ArmCommand c;
+  c.kind = CommandKind::kFingerVelocities;
+  c.finger_velocity_mps = {Vec3{0, 0, speed}, Vec3{0, 0, speed}};
+  return c;
+}
+
+ArmCommand hold() {
+  ArmCommand c;
+  c.kind = CommandKind::kHold;
+  return c;
+}
+
+// Steps until `done` or `max_s`, checking finiteness at every step; returns false on timeout.
+template <typename Done>
+bool run_until(World& w, double dt, double max_s, Done done) {
+  const double end = w.time() + max_s;
+  while (w.time() < end) {
+    EXPECT_TRUE(w.step(dt));
+    EXPECT_TRUE(all_finite(w));
+    if (done()) return true;
+  }
+  return false;
+}
+
+// The scripted hand: down to the cap, squeeze until the strongest element carries `grip_n`,
+// hold. Returns the world with the cap grasped on the table.
+World grasp(WorldParams p, double dt, double grip_n) {
+  p.arm.start_position_m = {p.cap.x_m, p.cap.y_m, 0.03};
+  p.arm.vibration_m = 0;
+  World w(p);
+  w.apply(move_to(1, {p.cap.x_m, p.cap.y_m, 0.01}));
+  EXPECT_TRUE(run_until(w, dt, 5, [&] { return w.arm().segment_done; }));
+  w.apply(squeeze(0.002));
+  EXPECT_TRUE(run_until(w, dt, 10, [&] { return max_fn(w, 0) > grip_n && max_fn(w, 1) > grip_n; }));
+  w.apply(hold());
+  run_until(w, dt, 0.2, [] { return false; });
+  return w;
+}
+
+// grasp(), then lift 30 mm and wait.
+World grasp_and_lift(const WorldParams& p, double dt, double grip_n) {
+  World w = grasp(p, dt, grip_n);
+  w.apply(move_to(2, {p.cap.x_m, p.cap.y_m, 0.04}, 0, 0.02));
+  run_until(w, dt, 3, [&] { return w.arm().segment_done; });
+  run_until(w, dt, 0.3, [] { return false; });
+  return w;
+}
+
+TEST(World, MoveToReachesTargetWithBoundedAcceleration) {
+  WorldParams p;
+  p.arm.vibration_m = 0;
+  World w(p);
+  const Vec3 target{0.30, 0.05, 0.20};
+  ASSERT_TRUE(w.apply(move_to(7, target, 0.3, 0.1, 1.0)));
+  const double dt = 1e-4;
+  Vec3 v_prev = w.arm().velocity_mps;
+  double max_accel = 0;
+  ASSERT_TRUE(run_until(w, dt, 10, [&] {
+    max_accel = std::max(max_accel, norm(w.arm().velocity_mps - v_prev) / dt);
+    v_prev = w.arm().velocity_mps;
+    return w.arm().segment_done;
+  }));
+  EXPECT_EQ(w.arm().active_segment_id, 7U);
+  EXPECT_LT(norm(w.arm().position_m - target), 1e-6);
+  EXPECT_NEAR(w.arm().yaw_rad, 0.3, 1e-5);
+  EXPECT_LE(max_accel, p.arm.max_accel_mps2 * 1.001);
+}
+
+TEST(World, RefusesNonFiniteCommands) {
+  World w{WorldParams{}};
+  ArmCommand c = move_to(1, {NAN, 0, 0});
+  EXPECT_FALSE(w.apply(c));
+  EXPECT_FALSE(w.arm().active_segment_id == 1);
+  ArmCommand v = squeeze(INFINITY);
+  EXPECT_FALSE(w.apply(v));
+}
+
+TEST(World, OpenMovesFingertipsAwayByTheDistance) {
+  World w{WorldParams{}};
+  const Vec3 before = w.fingertip(0).offset_w;
+  ArmCommand open;
+  open.kind = CommandKind::kOpen;
+  open.open_speed_mps = 0.005;
+  open.open_distance_m = 0.004;
+  ASSERT_TRUE(w.apply(open));
+  run_until(w, 1e-4, 2.0, [] { return false; });
+  // Fingertip 0 opens toward -x_w.
+  EXPECT_NEAR(before.x - w.fingertip(0).offset_w.x, 0.004, 1e-4);
+  EXPECT_NEAR(w.fingertip(1).offset_w.x - w.fingertip(1).offset_w.x, 0.0, 1e-12);
+}
+
+TEST(World, FirmGraspHoldsTheCapWithoutSlip) {
+  WorldParams p;
+  const World w = grasp_and_lift(p, 1e-4, 0.5);
+  EXPECT_TRUE(w.cap().lifted);
+  EXPECT_FALSE(w.cap().dropped);
+  EXPECT_EQ(w.cap().place, CapPlace::kFree);
+  // The cap rides with the fingertips: its centre is at the grasp height, less the feelers'
+  // tiny elastic deflection under its weight.
+  EXPECT_NEAR(w.cap().position_m.z, 0.04 - 0.002, 0.002);
+  int in_contact = 0;
+  for (const Element& e : w.fingertip(0).elements) {
+    if (!e.contact) continue;
+    ++in_contact;
+    EXPECT_LE(std::hypot(e.ft_n[0], e.ft_n[1]), p.cap.friction * e.fn_n);
+  }
+  EXPECT_GE(in_contact, 5);  // a patch of elements, like Fig. 3
+}
+
+TEST(World, IncipientSlipAtLightlyPressedElementsBeforeGrossSlip) {
+  // A heavy cap: the lift first breaks the lightly pressed rim elements loose
+  // (incipient slip), and only later every element (gross slip: the cap stays behind).
+  WorldParams p;
+  p.cap.mass_kg = 0.5;
+  const double dt = 1e-4;
+  World w = grasp(p, dt, 0.5);
+  w.apply(move_to(2, {p.cap.x_m, p.cap.y_m, 0.02}, 0, 0.005));
+  std::array<bool, kElementsPerFingertip> released{};
+  double first_any = -1;
+  double first_all = -1;
+  run_until(w, dt, 2.0, [&] {
+    const Fingertip& t = w.fingertip(0);
+    bool all = true;
+    int contacts = 0;
+    for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
+      const Element& e = t.elements[k];
+      if (!e.contact) continue;
+      ++contacts;
+      released[k] = released[k] || e.frame_releases > 0;
+      all = all && released[k];
+      if (released[k] && first_any < 0) first_any = w.time();
+    }
+    if (contacts > 0 && all && first_all < 0) first_all = w.time();
+    return first_all >= 0;
+  });
+  ASSERT_GT(first_any, 0);
+  ASSERT_GT(first_all, 0);
+  EXPECT_LT(first_any, first_all);
+  EXPECT_LT(w.cap().position_m.z - p.cap.height_m / 2, 0.002);  // it stayed near the table
+}
+
+TEST(World, StickingElementsMoveTheirSpotLessThanDrPerFrameWhileHolding) {
+  WorldParams p;
+  World w = grasp_and_lift(p, 1e-4, 0.5);
+  // Held still in the air: frame after frame, sticking spots stay put.
+  for (int frame = 0; frame < 50; ++frame) {
+    std::array<std::array<double, 2>, kElementsPerFingertip> before{};
+    for (std::size_t k = 0; k < kElementsPerFingertip; ++k)
+      before[k] = w.fingertip(0).elements[k].s_mm;
+    for (int s = 0; s < 100; ++s)
+      ASSERT_TRUE(w.step(1e-4));
+    for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
+      const Element& e = w.fingertip(0).elements[k];
+      if (!e.contact) continue;
+      EXPECT_EQ(e.frame_releases, 0U);
+      EXPECT_LT(std::hypot(e.s_mm[0] - before[k][0], e.s_mm[1] - before[k][1]), 0.004);
+    }
+    w.clear_frame_accumulators();
+  }
+}
+
+TEST(World, SlidingElementsReleaseByMoreThanDr) {
+  // Pull the fingertips up along a cap too heavy to follow: every release of a feeler pressed
+  // with 0.1 N or more moves its spot back by more than dr.
+  WorldParams p;
+  p.cap.mass_kg = 0.5;
+  World w = grasp(p, 1e-4, 0.5);
+  w.apply(move_to(2, {p.cap.x_m, p.cap.y_m, 0.02}, 0, 0.003));
+  int releases = 0;
+  for (int step = 0; step < 20000; ++step) {
+    std::array<std::array<double, 2>, kElementsPerFingertip> before{};
+    for (std::size_t k = 0; k < kElementsPerFingertip; ++k)
+      before[k] = w.fingertip(0).elements[k].s_mm;
+    ASSERT_TRUE(w.step(1e-4));
+    for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
+      const Element& e = w.fingertip(0).elements[k];
+      if (!e.sliding || e.fn_n < 0.1) continue;
+      ++releases;
+      EXPECT_GT(std::hypot(e.s_mm[0] - before[k][0], e.s_mm[1] - before[k][1]), 0.004);
+    }
+  }
+  EXPECT_GT(releases, 0);
+}
+
+TEST(World, CapTurnsFreelyUpToFreeTurnThenTightens) {
+  WorldParams p;
+  p.arm.vibration_m = 0;
+  p.bottle.free_turn_deg = 60.0;
+  p.arm.start_position_m = {p.cap.x_m, p.cap.y_m, 0.03};
+  const double dt = 1e-4;
+  World w(p);
+  // Grasp, carry over the bottle, lower onto it, open, grasp again and turn clockwise.
+  w.apply(move_to(1, {p.cap.x_m, p.cap.y_m, 0.01}));
+  ASSERT_TRUE(run_until(w, dt, 5, [&] { return w.arm().segment_done; }));
+  w.apply(squeeze(0.002));
+  ASSERT_TRUE(run_until(w, dt, 10, [&] { return max_fn(w, 0) > 0.5 && max_fn(w, 1) > 0.5; }));
+  w.apply(hold());
+  const double z_grip = p.bottle.height_m + 0.002;
+  w.apply(move_to(2, {p.cap.x_m, p.cap.y_m, z_grip + 0.02}, 0, 0.1));
+  ASSERT_TRUE(run_until(w, dt, 10, [&] { return w.arm().segment_done; }));
+  w.apply(move_to(3, {p.bottle.x_m, p.bottle.y_m, z_grip + 0.02}, 0, 0.1));
+  ASSERT_TRUE(run_until(w, dt, 10, [&] { return w.arm().segment_done; }));
+  w.apply(move_to(4, {p.bottle.x_m, p.bottle.y_m, z_grip - 0.005}, 0, 0.005));
+  ASSERT_TRUE(run_until(w, dt, 10, [&] { return w.cap().place == CapPlace::kOnBottle; }));
+  w.apply(hold());
+  ArmCommand open;
+  open.kind = CommandKind::kOpen;
+  open.open_speed_mps = 0.005;
+  open.open_distance_m = 0.004;
+  w.apply(open);
+  ASSERT_TRUE(run_until(w, dt, 3, [&] { return w.cap().place == CapPlace::kThreaded; }));
+  run_until(w, dt, 1.0, [] { return false; });
+  w.apply(squeeze(0.002));
+  ASSERT_TRUE(run_until(w, dt, 10, [&] { return max_fn(w, 0) > 0.5 && max_fn(w, 1) > 0.5; }));
+  w.apply(hold());
+  const double yaw0 = w.arm().yaw_rad;
+  ArmCommand turn = move_to(5, w.arm().position_m, yaw0 - 1.5, 0.01, 0.25);
+  w.apply(turn);
+  run_until(w, dt, 8, [&] { return w.arm().segment_done; });
+  EXPECT_TRUE(w.cap().tight);
+  // The wrist turned 86 degrees; the cap only to its free turn (and a hair into the thread).
+  EXPECT_NEAR(w.cap().angle_deg, 60.0, 0.5);
+  EXPECT_GT(w.cap().thread_torque_nm, 0.0);  // counter-clockwise: against the tightening
+  EXPECT_FALSE(w.cap().dropped);
+}
+
+TEST(World, OutcomeDoesNotChangeWithATenTimesSmallerStep) {
+  WorldParams p;
+  const World a = grasp_and_lift(p, 1e-4, 0.5);
+  const World b = grasp_and_lift(p, 1e-5, 0.5);
+  EXPECT_EQ(a.cap().dropped, b.cap().dropped);
+  EXPECT_EQ(a.cap().place, b.cap().place);
+  EXPECT_NEAR(a.cap().position_m.z, b.cap().position_m.z, 5e-5);
+  EXPECT_NEAR(max_fn(a, 0), max_fn(b, 0), 0.02);
+}
+
+TEST(Truth, SlipEpisodesFollowTheRule) {
+  WorldParams p;
+  p.cap.mass_kg = 0.5;  // the lift tears the fingertips along the cap
+  World w = grasp(p, 1e-4, 0.5);
+  w.apply(move_to(2, {p.cap.x_m, p.cap.y_m, 0.02}, 0, 0.003));
+  TruthRecorder rec(0.04, 0.1);
+  int sliding = 0;
+  for (int frame = 1; frame < 100; ++frame) {
+    for (int s = 0; s < 100; ++s)
+      ASSERT_TRUE(w.step(1e-4));
+    const GroundTruth& gt = rec.take(w, static_cast<std::uint64_t>(frame), 0.004);
+    for (const ElementTruth& e : gt.fingertips[0].elements) {
+      if (e.sliding) {
+        ++sliding;
+        EXPECT_TRUE(e.visible);
+        EXPECT_TRUE(e.slip_mm > 0.004 || e.surface_mm > 0.004);
+      }
+      if (!e.contact) {
+        EXPECT_EQ(e.fz_n, 0.0);
+      }
+    }
+    // take() cleared the accumulators.
+    for (const Element& e : w.fingertip(0).elements)
+      EXPECT_EQ(e.frame_releases, 0U);
+  }
+  EXPECT_GT(sliding, 0);
+}
+
+}  // namespace
+}  // namespace tactile::rig
