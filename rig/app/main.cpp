@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <exception>
 #include <filesystem>
 #include <string>
@@ -67,12 +68,17 @@ int run(int argc, char** argv) {
   options.dt_s = dt_s;
   options.record_series = !plots_dir.empty() || !series_path.empty();
   const auto start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();
   const tactile::rig::LockstepResult result = tactile::rig::run_lockstep(scenario, options);
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double ratio = result.report.sim_time_s > 0 ? wall_s / result.report.sim_time_s : 0.0;
-  tactile::util::log_info("simulated {:.2f} s in {:.2f} s wall ({:.3f} of simulated time), {}",
-                          result.report.sim_time_s, wall_s, ratio, result.report.end_reason);
+  const double cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+  const double sim_s = result.report.sim_time_s;
+  const double ratio = sim_s > 0 ? wall_s / sim_s : 0.0;
+  const double cpu_ratio = sim_s > 0 ? cpu_s / sim_s : 0.0;
+  tactile::util::log_info(
+      "simulated {:.2f} s in {:.2f} s wall ({:.3f} of simulated time), {:.2f} s CPU ({:.3f}), {}",
+      sim_s, wall_s, ratio, cpu_s, cpu_ratio, result.report.end_reason);
 
   const std::string json = tactile::rig::report_json(result.report);
   if (!report_path.empty()) {

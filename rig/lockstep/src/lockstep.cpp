@@ -210,6 +210,11 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   std::uint64_t n_shear = 0;
   bool transport_snapshot = false;
 
+  // The paper's Fig. 10 plots against the fingertip's position along the transport: here the
+  // horizontal direction from the cap's place to the bottle.
+  Vec3 path_dir{sc.world.bottle.x_m - sc.world.cap.x_m, sc.world.bottle.y_m - sc.world.cap.y_m, 0};
+  path_dir = norm(path_dir) > 0 ? (1.0 / norm(path_dir)) * path_dir : Vec3{1, 0, 0};
+
   std::uint64_t frame = 0;
   const auto max_frames = static_cast<std::uint64_t>(std::ceil(sc.max_time_s * sc.camera.fps));
   rep.end_reason = "max_time";
@@ -325,7 +330,8 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
       sample.touch[i] = out.flags.fingertip[i].touch;
       sample.slip[i] = out.flags.fingertip[i].slip;
       sample.over[i] = out.flags.fingertip[i].over;
-      sample.fingertip_x_m[i] = world.fingertip(i).apex_world.x;
+      const Vec3 apex = world.fingertip(i).apex_world;
+      sample.fingertip_x_m[i] = apex.x * path_dir.x + apex.y * path_dir.y;
     }
     sample.phase = static_cast<std::uint8_t>(out.phase);
     sample.twist_cycle = out.twist_cycle;

@@ -61,8 +61,12 @@ Calibration make_calibration(const std::string& sensor_id, const CameraParams& c
       std::sqrt(cam.noise_sigma * cam.noise_sigma +
                 (cam.shot_noise_gain > 0 ? cam.background / cam.shot_noise_gain : 0.0));
   cal.noise_floor = scale * std::max(opt.noise_floor_min, opt.noise_floor_sigmas * bg_sigma);
-  cal.contact_on = scale * opt.contact_on;
-  cal.contact_off = scale * opt.contact_off;
+  // The contact thresholds hold for read noise of 2 gray levels and grow in proportion to the
+  // noise beyond it: the dimmest spot in contact then keeps its peak-to-noise ratio, and with it
+  // the centroid's noise and the rate of false slips (notes/limits.md: sigma_x ~ sigma_n / A).
+  const double noise_scale = std::max(1.0, bg_sigma / 2.0);
+  cal.contact_on = scale * opt.contact_on * noise_scale;
+  cal.contact_off = scale * opt.contact_off * noise_scale;
   cal.normal_curve =
       PiecewiseLinear({0, 2000 * scale, 8000 * scale, 20000 * scale}, {0, 0.2, 1.0, 3.0});
   cal.shear_curve = PiecewiseLinear({0, 0.02, 0.08}, {0, 0.05, 0.4});

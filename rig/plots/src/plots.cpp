@@ -62,7 +62,8 @@ std::vector<std::filesystem::path> write_plots(const LockstepResult& run,
     plot::Figure fig(1000, 600);
     fig.title("Fig. 10: y-directional centroid change vs x-directional fingertip position");
     auto& p = fig.add_panel();
-    p.x_label("fingertip x [mm] (world)").y_label("dy_G [mm] (+ along gravity)");
+    p.x_label("fingertip position along the transport, cap to bottle [mm]")
+        .y_label("dy_G [mm] (+ along gravity)");
     for (std::size_t i = 0; i < kFingertips; ++i) {
       std::vector<double> x;
       std::vector<double> y;

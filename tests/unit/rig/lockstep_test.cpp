@@ -17,6 +17,7 @@ TEST(Lockstep, DefaultScenarioTellsThePapersStory) {
   EXPECT_TRUE(r.physics_finite);
   EXPECT_TRUE(rep.completed) << rep.end_reason;
   EXPECT_FALSE(rep.dropped);
+  EXPECT_EQ(rep.grasp_classified, std::optional<std::string>("grasp"));
   EXPECT_EQ(rep.release_classified, std::optional<std::string>("release"));
   ASSERT_TRUE(rep.tightened_cycle.has_value());
   EXPECT_EQ(rep.tightened_cycle, rep.true_tight_cycle);
@@ -24,7 +25,7 @@ TEST(Lockstep, DefaultScenarioTellsThePapersStory) {
   EXPECT_EQ(rep.over_events, 0);
   EXPECT_NEAR(rep.final_cap_angle_deg, 240.0, 1.0);
   EXPECT_GE(rep.slip.precision, 0.95);
-  EXPECT_GE(rep.slip.recall, 0.90);
+  EXPECT_GE(rep.slip.recall, 0.95);
   EXPECT_LE(rep.slip.latency_frames_p99, 2.0);
   EXPECT_LE(rep.force_rmse_normal_N, 0.02 * rep.normal_full_scale_N);
   EXPECT_GT(rep.slip.onsets, 10U);

@@ -44,7 +44,7 @@ TEST(Scenario, TheInterfaceKeysAreEnoughAndDefaultsFillTheRest) {
 TEST(Scenario, BundledScenariosLoad) {
   const std::filesystem::path dir = TACTILE_RIG_SCENARIOS;
   const Scenario d = load_scenario(dir / "default.yaml");
-  EXPECT_EQ(d.world.cap.mass_kg, 0.010);
+  EXPECT_EQ(d.world.cap.mass_kg, 0.020);
   int variations = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir / "variations")) {
     EXPECT_NO_THROW(load_scenario(entry.path())) << entry.path();

@@ -63,7 +63,9 @@ struct FrameSample {
   std::uint32_t twist_cycle = 0;
   std::array<bool, kFingertips> touch{}, slip{}, over{}, true_slip{};
   std::array<double, kFingertips> max_fz_measured{}, max_fz_true{};
-  std::array<double, kFingertips> fingertip_x_m{};  // apex, world x
+  // Apex position along the transport (the horizontal direction from cap to bottle), m: the
+  // paper's x-directional fingertip position.
+  std::array<double, kFingertips> fingertip_x_m{};
   // Signed y-directional centroid change (mm) of the in-contact element moving most.
   std::array<double, kFingertips> dy_mm{};
   double cap_angle_deg = 0;

@@ -40,8 +40,8 @@ struct SensorOpticsParams {
   // Spot model: a Gaussian whose peak is spot_peak_ref gray levels (8-bit) when its width is
   // free; the width sqrt(G / (2 pi peak)) is held within [sigma_min, sigma_max], and the peak
   // takes up the rest.
-  double spot_peak_ref = 100.0;
-  double spot_sigma_min_px = 1.2;
+  double spot_peak_ref = 200.0;
+  double spot_sigma_min_px = 1.0;
   double spot_sigma_max_px = 5.5;
   double contact_on = 400.0;  // G, 8-bit units
   double contact_off = 250.0;
