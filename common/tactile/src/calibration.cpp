@@ -1,8 +1,11 @@
 #include "tactile/calibration.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <sstream>
+#include <stdexcept>
+#include <utility>
 
 #include "disk.hpp"
 
@@ -66,6 +69,53 @@ std::int64_t disk_pixel_count(Vec2 center, double radius) {
   std::int64_t n = 0;
   for_each_disk_row(center, radius, [&](int, int x0, int x1) { n += x1 - x0; });
   return n;
+}
+
+std::vector<DiskRow> disk_rows(Vec2 center, double radius) {
+  std::vector<DiskRow> rows;
+  for_each_disk_row(center, radius, [&](int y, int x0, int x1) { rows.push_back({y, x0, x1}); });
+  return rows;
+}
+
+namespace {
+
+// [start, start + len) covering [lo, hi) with start a multiple of `offset_step` and len a
+// multiple of `size_step`, inside [0, n); the whole [0, n) when the steps cannot be met.
+std::pair<int, int> aligned_cover(int lo, int hi, int n, int offset_step, int size_step) {
+  int start = lo / offset_step * offset_step;
+  int len = (hi - start + size_step - 1) / size_step * size_step;
+  if (start + len > n) {
+    start = (n - len) / offset_step * offset_step;
+    if (n - len < 0 || start > lo || start + len < hi) return {0, n};
+  }
+  return {start, len};
+}
+
+}  // namespace
+
+Region region_of_interest(const Calibration& cal, RegionRules rules) {
+  validate(cal);
+  if (rules.offset_x_step < 1 || rules.offset_y_step < 1 || rules.width_step < 1 ||
+      rules.height_step < 1) {
+    throw std::invalid_argument("region_of_interest: every step must be at least 1");
+  }
+  int x_lo = cal.width;
+  int x_hi = 0;
+  int y_lo = cal.height;
+  int y_hi = 0;
+  for (const ElementCalibration& e : cal.elements) {
+    for_each_disk_row(e.center_px, e.radius_px, [&](int y, int x0, int x1) {
+      x_lo = std::min(x_lo, x0);
+      x_hi = std::max(x_hi, x1);
+      y_lo = std::min(y_lo, y);
+      y_hi = std::max(y_hi, y + 1);
+    });
+  }
+  const auto [x, w] = rules.full_width ? std::pair<int, int>{0, cal.width}
+                                       : aligned_cover(x_lo, x_hi, cal.width, rules.offset_x_step,
+                                                       rules.width_step);
+  const auto [y, h] = aligned_cover(y_lo, y_hi, cal.height, rules.offset_y_step, rules.height_step);
+  return {x, y, w, h};
 }
 
 void validate(const Calibration& cal) {

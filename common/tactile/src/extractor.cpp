@@ -7,6 +7,7 @@
 #include <string>
 
 #include "disk.hpp"
+#include "kernels.hpp"
 
 namespace tactile {
 namespace {
@@ -19,6 +20,17 @@ constexpr double kQ = 256.0;
 template <typename Pixel>
 constexpr std::int32_t q8(Pixel p) {
   return static_cast<std::int32_t>(p) << kQBits;
+}
+
+// ceil and floor for values well inside the int range, without a library call (the baseline
+// x86-64 build has no rounding instruction).
+int ceil_int(double v) {
+  const int i = static_cast<int>(v);
+  return i < v ? i + 1 : i;
+}
+int floor_int(double v) {
+  const int i = static_cast<int>(v);
+  return i > v ? i - 1 : i;
 }
 
 double soft_edge(double half_width, double distance) {
@@ -117,11 +129,28 @@ Extractor::Extractor(Calibration cal, ExtractorOptions options)
     layout_.push_back(el);
   }
   ref_q_.assign(offset, 0);
-  int max_side = 1;
-  for (const ElementCalibration& e : cal_.elements) {
-    max_side = std::max(max_side, static_cast<int>(2 * std::ceil(e.radius_px)) + 3);
+
+  kernels_ = opt_.portable_kernels ? &detail::portable_kernels() : &detail::best_kernels();
+  disks_ = region_of_interest(cal_);
+  // Blocks: each disk's bounding box widened to a multiple of 32 columns (one AVX2 vector of
+  // 8-bit pixels), kept inside the region of all disks so that a region-of-interest frame holds
+  // every block too.
+  std::uint32_t block_offset = 0;
+  for (const ElementLayout& el : layout_) {
+    int x1 = el.origin_x;
+    for (std::uint32_t k = el.span_begin; k < el.span_end; ++k)
+      x1 = std::max(x1, spans_[k].x1);
+    const int width = x1 - el.origin_x;
+    const int padded = std::min((width + 31) / 32 * 32, disks_.width);
+    const int x0 = std::min(el.origin_x, disks_.x + disks_.width - padded);
+    const int height = static_cast<int>(el.span_end - el.span_begin);
+    blocks_.push_back({x0, el.origin_y, padded, height, block_offset});
+    block_offset += static_cast<std::uint32_t>(padded * height);
   }
-  wx_.assign(static_cast<std::size_t>(max_side), 0.0);
+  int max_side = 1;
+  for (const detail::Block& b : blocks_)
+    max_side = std::max({max_side, b.width, b.height});
+  wx_.assign(static_cast<std::size_t>(max_side), 0.0F);
   wxu_ = wx_;
   wxu2_ = wx_;
   wy_ = wx_;
@@ -134,8 +163,20 @@ Extractor::Extractor(Calibration cal, ExtractorOptions options)
 }
 
 bool Extractor::geometry_matches(const ImageView& f) const {
-  return f.data != nullptr && f.width == cal_.width && f.height == cal_.height &&
-         f.stride_bytes >= static_cast<std::size_t>(f.width) * bytes_per_pixel(f.format);
+  if (f.data == nullptr || f.width <= 0 || f.height <= 0 ||
+      f.stride_bytes < static_cast<std::size_t>(f.width) * bytes_per_pixel(f.format)) {
+    return false;
+  }
+  if (f.origin_x == 0 && f.origin_y == 0 && f.width == cal_.width && f.height == cal_.height)
+    return true;
+  if (!opt_.accept_regions) return false;
+  // A region of interest: inside the sensor, holding every disk pixel.
+  const std::int64_t x0 = f.origin_x;
+  const std::int64_t y0 = f.origin_y;
+  const std::int64_t x1 = x0 + f.width;
+  const std::int64_t y1 = y0 + f.height;
+  return x0 >= 0 && y0 >= 0 && x1 <= cal_.width && y1 <= cal_.height && x0 <= disks_.x &&
+         y0 <= disks_.y && x1 >= disks_.x + disks_.width && y1 >= disks_.y + disks_.height;
 }
 
 // --- reference ----------------------------------------------------------------------------------
@@ -168,7 +209,8 @@ ReferenceResult Extractor::add_reference_frame(const ImageView& f) {
         for (int x = sp.x0; x < sp.x1; ++x) {
           const std::uint64_t sum = capture_sum_[static_cast<std::size_t>(sp.y) * w + x];
           const auto mean_q = static_cast<std::int64_t>((sum * 256U + n / 2) / n);
-          const std::int64_t d = static_cast<std::int64_t>(q8(f.at(x, sp.y))) - mean_q;
+          const std::int64_t d =
+              static_cast<std::int64_t>(q8(f.at(x - f.origin_x, sp.y - f.origin_y))) - mean_q;
           up += std::max<std::int64_t>(d - floor_q_, 0);
           down += std::max<std::int64_t>(-d - floor_q_, 0);
         }
@@ -179,15 +221,17 @@ ReferenceResult Extractor::add_reference_frame(const ImageView& f) {
       }
     }
   }
-  for (int y = 0; y < cal_.height; ++y) {
-    std::uint32_t* sum = capture_sum_.data() + static_cast<std::size_t>(y) * w;
+  // The frame's pixels (the whole sensor, or the region of interest it covers).
+  for (int y = 0; y < f.height; ++y) {
+    std::uint32_t* sum = capture_sum_.data() + static_cast<std::size_t>(y + f.origin_y) * w +
+                         static_cast<std::size_t>(f.origin_x);
     if (f.format == PixelFormat::kMono8) {
       const auto* row = f.row<std::uint8_t>(y);
-      for (int x = 0; x < cal_.width; ++x)
+      for (int x = 0; x < f.width; ++x)
         sum[x] += row[x];
     } else {
       const auto* row = f.row<std::uint16_t>(y);
-      for (int x = 0; x < cal_.width; ++x)
+      for (int x = 0; x < f.width; ++x)
         sum[x] += row[x];
     }
   }
@@ -262,6 +306,7 @@ ReferenceResult Extractor::complete_reference() {
   }
 
   ref_q_ = std::move(mean_q);
+  build_thresholds();
   const PixelFormat fmt = cal_.bit_depth == 8 ? PixelFormat::kMono8 : PixelFormat::kMono16;
   reference_image_ = Image(cal_.width, cal_.height, fmt);
   for (int y = 0; y < cal_.height; ++y) {
@@ -278,59 +323,86 @@ ReferenceResult Extractor::complete_reference() {
   return {ReferenceStatus::kComplete, frames, 0, 0};
 }
 
+void Extractor::build_thresholds() {
+  const std::int64_t max_level = cal_.bit_depth == 8 ? 255 : 65535;
+  // No pixel passes this threshold: 256 * 65535 < it.
+  constexpr std::int32_t kNever = (65535 << kQBits) + 1;
+  thr_q_.resize(ref_q_.size());
+  for (std::size_t k = 0; k < ref_q_.size(); ++k)
+    thr_q_[k] = ref_q_[k] + floor_q_;
+  const std::size_t n =
+      blocks_.empty() ? 0
+                      : blocks_.back().offset + static_cast<std::size_t>(blocks_.back().width) *
+                                                    static_cast<std::size_t>(blocks_.back().height);
+  blk_thr_.assign(n, kNever);
+  blk_ref_.assign(n, detail::kOutsideDisk);
+  blk_lo_.assign(n, 0);
+  if (cal_.bit_depth == 8) {
+    blk_hi8_.assign(n, 255);
+    blk_thr16_.assign(n, 65535);
+    blk_ref16_.assign(n, 65535);
+    blk_ref_hi8_.assign(n, 255);
+    blk_ref_lo_.assign(n, 0);
+  } else {
+    blk_hi16_.assign(n, 65535);
+  }
+  for (std::size_t i = 0; i < layout_.size(); ++i) {
+    const ElementLayout& el = layout_[i];
+    const detail::Block& b = blocks_[i];
+    for (std::uint32_t s = el.span_begin; s < el.span_end; ++s) {
+      const Span& sp = spans_[s];
+      for (int x = sp.x0; x < sp.x1; ++x) {
+        const std::size_t k = sp.ref_offset + static_cast<std::size_t>(x - sp.x0);
+        const std::size_t at =
+            b.offset + static_cast<std::size_t>(sp.y - b.y0) * static_cast<std::size_t>(b.width) +
+            static_cast<std::size_t>(x - b.x0);
+        const std::int64_t t = thr_q_[k];
+        blk_thr_[at] = thr_q_[k];
+        blk_ref_[at] = ref_q_[k];
+        // t >> 8 beyond the largest level: no pixel passes, and hi = max_level says the same.
+        const std::int64_t hi = std::min<std::int64_t>(t >> kQBits, max_level);
+        blk_lo_[at] = static_cast<std::uint8_t>(t & 0xFF);
+        if (cal_.bit_depth == 8) {
+          blk_hi8_[at] = static_cast<std::uint8_t>(hi);
+          blk_thr16_[at] = static_cast<std::uint16_t>(std::min<std::int64_t>(t, 65535));
+          blk_ref16_[at] = static_cast<std::uint16_t>(std::min<std::int32_t>(ref_q_[k], 65535));
+          blk_ref_hi8_[at] = static_cast<std::uint8_t>(std::min(ref_q_[k] >> kQBits, 255));
+          blk_ref_lo_[at] = static_cast<std::uint8_t>(ref_q_[k] & 0xFF);
+        } else {
+          blk_hi16_[at] = static_cast<std::uint16_t>(hi);
+        }
+      }
+    }
+  }
+}
+
+detail::BlockData Extractor::block_data() const noexcept {
+  detail::BlockData d;
+  d.thr = blk_thr_.data();
+  d.ref = blk_ref_.data();
+  d.thr16 = blk_thr16_.data();
+  d.ref16 = blk_ref16_.data();
+  d.thr_hi8 = blk_hi8_.data();
+  d.thr_lo = blk_lo_.data();
+  d.thr_hi16 = blk_hi16_.data();
+  d.ref_hi8 = blk_ref_hi8_.data();
+  d.ref_lo = blk_ref_lo_.data();
+  return d;
+}
+
 // --- per frame ----------------------------------------------------------------------------------
 
 void Extractor::forget_previous() noexcept {
   has_previous_ = false;
 }
 
-template <typename Pixel, bool kPlainWeights>
-static void accumulate(const Pixel* row, const std::int32_t* ref, int x0, int x1, int origin_x,
-                       std::int32_t floor_q, std::int64_t& g, std::int64_t& c0, std::int64_t& cx,
-                       std::int64_t& above, std::int32_t& peak) noexcept {
-  std::int64_t rg = 0;
-  std::int64_t rc = 0;
-  std::int64_t rcx = 0;
-  std::int64_t ra = 0;
-  std::int32_t rp = peak;
-  for (int x = x0; x < x1; ++x) {
-    const std::int32_t d = q8(row[x]) - ref[x - x0];
-    const std::int32_t w = std::max(d - floor_q, 0);
-    const std::int32_t wc = kPlainWeights ? std::max(d, 0) : w;
-    rg += w;
-    rc += wc;
-    rcx += static_cast<std::int64_t>(wc) * (x - origin_x);
-    ra += wc > 0 ? 1 : 0;
-    rp = std::max(rp, d);
-  }
-  g += rg;
-  c0 += rc;
-  cx += rcx;
-  above += ra;
-  peak = rp;
+namespace {
+
+detail::FrameRef frame_ref(const ImageView& f) {
+  return {f.data, f.stride_bytes, f.origin_x, f.origin_y};
 }
 
-template <typename Pixel>
-Extractor::Moments Extractor::first_pass(const ElementLayout& el,
-                                         const ImageView& f) const noexcept {
-  Moments m;
-  const bool plain = opt_.estimator == CentroidEstimator::kPlain;
-  for (std::uint32_t s = el.span_begin; s < el.span_end; ++s) {
-    const Span& sp = spans_[s];
-    const Pixel* row = f.row<Pixel>(sp.y);
-    const std::int32_t* ref = ref_q_.data() + sp.ref_offset;
-    const std::int64_t c0_before = m.c0;
-    if (plain) {
-      accumulate<Pixel, true>(row, ref, sp.x0, sp.x1, el.origin_x, floor_q_, m.g, m.c0, m.cx,
-                              m.above, m.peak);
-    } else {
-      accumulate<Pixel, false>(row, ref, sp.x0, sp.x1, el.origin_x, floor_q_, m.g, m.c0, m.cx,
-                               m.above, m.peak);
-    }
-    m.cy += (m.c0 - c0_before) * (sp.y - el.origin_y);
-  }
-  return m;
-}
+}  // namespace
 
 template <typename Pixel>
 bool Extractor::windowed_pass(const ElementLayout& el, const ImageView& f, double& x, double& y,
@@ -347,12 +419,12 @@ bool Extractor::windowed_pass(const ElementLayout& el, const ImageView& f, doubl
     if (fy <= 0) continue;
     const int xa = std::max(sp.x0, col_lo);
     const int xb = std::min(sp.x1, col_hi + 1);
-    const Pixel* row = f.row<Pixel>(sp.y);
-    const std::int32_t* ref = ref_q_.data() + sp.ref_offset - sp.x0;
+    const Pixel* row = f.row<Pixel>(sp.y - f.origin_y);
+    const std::int32_t* thr = thr_q_.data() + sp.ref_offset;
     double r0 = 0;
     double rx = 0;
     for (int px = xa; px < xb; ++px) {
-      const std::int32_t w = std::max(q8(row[px]) - ref[px] - floor_q_, 0);
+      const std::int32_t w = std::max(q8(row[px - f.origin_x]) - thr[px - sp.x0], 0);
       if (w == 0) continue;
       const double wf = w * soft_edge(half, px - x);
       r0 += wf;
@@ -371,16 +443,16 @@ bool Extractor::windowed_pass(const ElementLayout& el, const ImageView& f, doubl
   return true;
 }
 
-// Fills w[k] = exp(-(first + k - c)^2 / (2 s^2)) for k in [0, n) by a recurrence (three exp
-// calls in all), with w*u and w*u^2 beside it where u = first + k - c.
-static void gaussian_weights(int first, int n, double c, double s, double* w, double* wu,
-                             double* wu2) noexcept {
-  const double a = 1.0 / (2.0 * s * s);
-  double u = first - c;
-  double wk = std::exp(-a * u * u);
-  double step = std::exp(-a * (2.0 * u + 1.0));
-  const double b = std::exp(-2.0 * a);
-  for (int k = 0; k < n; ++k, u += 1.0) {
+// Fills w[k] = exp(-(first + k - c)^2 / (2 s^2)) for k in [0, n) by a recurrence (two exp
+// calls, in float: the weights need no more), with w*u and w*u^2 beside it where
+// u = first + k - c.
+// b = exp(-2a), a = 1 / (2 s^2), is shared by the two axes.
+static void gaussian_weights(int first, int n, double c, float a, float b, float* w, float* wu,
+                             float* wu2) noexcept {
+  auto u = static_cast<float>(first - c);
+  float wk = std::exp(-a * u * u);
+  float step = std::exp(-a * (2.0F * u + 1.0F));
+  for (int k = 0; k < n; ++k, u += 1.0F) {
     w[k] = wk;
     if (wu != nullptr) {
       wu[k] = wk * u;
@@ -392,70 +464,55 @@ static void gaussian_weights(int first, int n, double c, double s, double* w, do
 }
 
 template <typename Pixel>
-bool Extractor::gaussian_pass(const ElementLayout& el, const ImageView& f, double& x, double& y,
+bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x, double& y,
                               double& sigma) noexcept {
+  const detail::Block& b = blocks_[element];
   const double s = sigma;
   const double reach = opt_.gaussian_reach_sigmas * s;
-  const Span& first_span = spans_[el.span_begin];
-  const Span& last_span = spans_[el.span_end - 1];
-  const int row_lo = std::max(first_span.y, static_cast<int>(std::ceil(y - reach)));
-  const int row_hi = std::min(last_span.y, static_cast<int>(std::floor(y + reach)));
-  const int bbox_w = static_cast<int>(wx_.size());
-  const int col_lo = std::max(el.origin_x, static_cast<int>(std::ceil(x - reach)));
-  const int col_hi = std::min(el.origin_x + bbox_w - 1, static_cast<int>(std::floor(x + reach)));
+  // x, y lie inside the disk and reach is at most 1024 * gaussian_reach_sigmas / 2: the
+  // integer conversions are safe for any sane reach; clamp it anyway.
+  const double r = std::min(reach, 1.0e6);
+  const int row_lo = std::max(b.y0, ceil_int(y - r));
+  const int row_hi = std::min(b.y0 + b.height - 1, floor_int(y + r));
+  const int col_lo = std::max(b.x0, ceil_int(x - r));
+  const int col_hi = std::min(b.x0 + b.width - 1, floor_int(x + r));
   if (row_hi < row_lo || col_hi < col_lo) return false;
-  const int ncols = col_hi - col_lo + 1;
-  const int nrows = row_hi - row_lo + 1;
-  if (ncols > bbox_w || nrows > static_cast<int>(wy_.size())) return false;
-  gaussian_weights(col_lo, ncols, x, s, wx_.data(), wxu_.data(), wxu2_.data());
-  gaussian_weights(row_lo, nrows, y, s, wy_.data(), nullptr, nullptr);
+  // Column weights, 0 outside the window: the kernels read whole groups of up to 16 columns
+  // around it.
+  const int first = col_lo - b.x0;
+  const int end = col_hi - b.x0 + 1;
+  for (int k = first / 16 * 16; k < first; ++k)
+    wx_[k] = wxu_[k] = wxu2_[k] = 0.0F;
+  for (int k = end; k < std::min(b.width, (end + 15) / 16 * 16); ++k)
+    wx_[k] = wxu_[k] = wxu2_[k] = 0.0F;
+  const auto a = static_cast<float>(1.0 / (2.0 * s * s));
+  const float ratio = std::exp(-2.0F * a);
+  gaussian_weights(col_lo, end - first, x, a, ratio, wx_.data() + first, wxu_.data() + first,
+                   wxu2_.data() + first);
+  gaussian_weights(row_lo, row_hi - row_lo + 1, y, a, ratio, wy_.data(), nullptr, nullptr);
 
-  double s0 = 0, s1x = 0, s2x = 0, s1y = 0, s2y = 0;
-  for (std::uint32_t k = el.span_begin + static_cast<std::uint32_t>(row_lo - first_span.y);
-       k < el.span_end; ++k) {
-    const Span& sp = spans_[k];
-    if (sp.y > row_hi) break;
-    const int xa = std::max(sp.x0, col_lo);
-    const int xb = std::min(sp.x1, col_hi + 1);
-    if (xa >= xb) continue;
-    const Pixel* row = f.row<Pixel>(sp.y);
-    const std::int32_t* ref = ref_q_.data() + sp.ref_offset - sp.x0;
-    const double* wx = wx_.data() - col_lo;
-    const double* wxu = wxu_.data() - col_lo;
-    const double* wxu2 = wxu2_.data() - col_lo;
-    double r0 = 0, r1 = 0, r2 = 0;
-    for (int px = xa; px < xb; ++px) {
-      // The raw increment, negative values included: the score is linear in the data.
-      const auto d = static_cast<double>(q8(row[px]) - ref[px]);
-      r0 += d * wx[px];
-      r1 += d * wxu[px];
-      r2 += d * wxu2[px];
-    }
-    const double wy = wy_[static_cast<std::size_t>(sp.y - row_lo)];
-    const double uy = sp.y - y;
-    s0 += wy * r0;
-    s1x += wy * r1;
-    s2x += wy * r2;
-    s1y += wy * uy * r0;
-    s2y += wy * uy * uy * r0;
-  }
-  if (!(s0 > 0)) return false;
+  const detail::GaussWindow win{row_lo,     row_hi,      col_lo,       col_hi,    y,
+                                wx_.data(), wxu_.data(), wxu2_.data(), wy_.data()};
+  const detail::GaussSums g = sizeof(Pixel) == 1
+                                  ? kernels_->gauss_u8(b, frame_ref(f), block_data(), win)
+                                  : kernels_->gauss_u16(b, frame_ref(f), block_data(), win);
+  if (!(g.s0 > 0)) return false;
   // Newton step on the score sum d (x - c) W(x - c) = 0; where the score is not concave
   // (a spot much wider than the weight) fall back to the weighted-centroid step.
   const double inv_s2 = 1.0 / (s * s);
-  const double dfx = s2x * inv_s2 - s0;
-  const double dfy = s2y * inv_s2 - s0;
-  double step_x = dfx < 0 ? -s1x / dfx : s1x / s0;
-  double step_y = dfy < 0 ? -s1y / dfy : s1y / s0;
+  const double dfx = g.s2x * inv_s2 - g.s0;
+  const double dfy = g.s2y * inv_s2 - g.s0;
+  double step_x = dfx < 0 ? -g.s1x / dfx : g.s1x / g.s0;
+  double step_y = dfy < 0 ? -g.s1y / dfy : g.s1y / g.s0;
   if (!(std::abs(step_x) <= s) || !(std::abs(step_y) <= s)) {
-    step_x = s1x / s0;
-    step_y = s1y / s0;
+    step_x = g.s1x / g.s0;
+    step_y = g.s1y / g.s0;
   }
   x += step_x;
   y += step_y;
   // The weighted second moment is the spot's variance combined with the weight's:
   // 1/m2 = 1/sigma_spot^2 + 1/sigma_weight^2 for a Gaussian spot.
-  const double m2 = (s2x + s2y) / (2.0 * s0);
+  const double m2 = (g.s2x + g.s2y) / (2.0 * g.s0);
   if (m2 > 0 && m2 < 0.95 * s * s) sigma = 1.0 / std::sqrt(1.0 / m2 - inv_s2);
   return std::isfinite(x) && std::isfinite(y);
 }
@@ -463,35 +520,59 @@ bool Extractor::gaussian_pass(const ElementLayout& el, const ImageView& f, doubl
 template <typename Pixel>
 void Extractor::measure_all(const ImageView& f, std::uint32_t gap) noexcept {
   const double mm = cal_.mm_per_px;
+  const detail::FrameRef fr = frame_ref(f);
+  const detail::BlockData data = block_data();
+  const bool plain = opt_.estimator == CentroidEstimator::kPlain;
+  const bool windowed = opt_.estimator == CentroidEstimator::kWindowed;
+  const bool gaussian = opt_.estimator == CentroidEstimator::kGaussian;
   for (std::size_t i = 0; i < layout_.size(); ++i) {
     const ElementLayout& el = layout_[i];
     const ElementCalibration& ec = cal_.elements[i];
     ElementState& st = state_[i];
     ElementReading& r = readings_[i];
-
-    const Moments m = first_pass<Pixel>(el, f);
-    const double g = static_cast<double>(m.g) / kQ;
-    const bool contact = (st.contact ? g >= cal_.contact_off : g >= cal_.contact_on) && m.c0 > 0;
+    const detail::Block& blk = blocks_[i];
 
     r = ElementReading{};
     r.id = ec.id;
+    // An element out of contact first gets its exact G on narrow integers, about the cost of
+    // reading its pixels; only if that reaches contact.on does it get the full pass.
+    if (!st.contact) {
+      const detail::GSum gs = sizeof(Pixel) == 1 ? kernels_->exact_g_u8(blk, fr, data)
+                                                 : kernels_->exact_g_u16(blk, fr, data);
+      const double g = static_cast<double>(gs.g_q8()) / kQ;
+      if (!(g >= cal_.contact_on)) {
+        r.G = g;
+        st = ElementState{};
+        continue;
+      }
+    }
+    const detail::MomentKind kind = plain      ? detail::MomentKind::kPlain
+                                    : windowed ? detail::MomentKind::kThresholdedCount
+                                    : gaussian ? detail::MomentKind::kStart
+                                               : detail::MomentKind::kThresholded;
+    const detail::Moments m = sizeof(Pixel) == 1 ? kernels_->moments_u8(blk, fr, data, kind)
+                                                 : kernels_->moments_u16(blk, fr, data, kind);
+    const double g = static_cast<double>(m.g) / kQ;
+    const bool contact = (st.contact ? g >= cal_.contact_off : g >= cal_.contact_on) && m.c0 > 0;
+
     r.G = g;
     r.contact = contact;
     if (!contact) {
       st = ElementState{};
       continue;
     }
-    double x = el.origin_x + static_cast<double>(m.cx) / static_cast<double>(m.c0);
-    double y = el.origin_y + static_cast<double>(m.cy) / static_cast<double>(m.c0);
-    if (opt_.estimator == CentroidEstimator::kWindowed) {
+    double x = blk.x0 + static_cast<double>(m.cx) / static_cast<double>(m.c0);
+    double y = blk.y0 + static_cast<double>(m.cy) / static_cast<double>(m.c0);
+    if (windowed) {
       const double half =
           std::sqrt(static_cast<double>(m.above) / std::numbers::pi) + opt_.window_margin_px;
       windowed_pass<Pixel>(el, f, x, y, half);
-    } else if (opt_.estimator == CentroidEstimator::kGaussian) {
+    } else if (gaussian) {
       // Width of the weight from the spot: for a Gaussian of peak A above a floor f,
-      // G = 2 pi sigma^2 (A - f - f ln(A / f)).
-      const double peak = m.peak / kQ;
+      // G = 2 pi sigma^2 (A - f - f ln(A / f)). The peak increment is the largest excess over
+      // the threshold (whole gray levels) plus the floor.
       const double fl = cal_.noise_floor;
+      const double peak = m.peak > 0 ? m.peak + fl : 0.0;
       const double shape = fl > 0 ? peak - fl - fl * std::log(std::max(peak / fl, 1.0)) : peak;
       double sigma = shape > 0.05 * peak && shape > 0
                          ? std::sqrt(g / (2 * std::numbers::pi * shape))
@@ -500,13 +581,13 @@ void Extractor::measure_all(const ImageView& f, std::uint32_t gap) noexcept {
       double gx = x;
       double gy = y;
       const double sigma_before = sigma;
-      if (gaussian_pass<Pixel>(el, f, gx, gy, sigma)) {
+      if (gaussian_pass<Pixel>(i, f, gx, gy, sigma)) {
         // A weight far from the spot's width loses efficiency: once more with the better width.
         if (std::abs(sigma - sigma_before) > 0.25 * sigma_before) {
           sigma = std::clamp(sigma, 0.6, std::max(0.6, ec.radius_px / 2));
           double hx = x;
           double hy = y;
-          if (gaussian_pass<Pixel>(el, f, hx, hy, sigma)) {
+          if (gaussian_pass<Pixel>(i, f, hx, hy, sigma)) {
             gx = hx;
             gy = hy;
           }

@@ -61,4 +61,40 @@ void validate(const Calibration& cal);
 // Number of pixels whose centres lie in the disk (the size of S).
 std::int64_t disk_pixel_count(Vec2 center, double radius);
 
+// One image row of a disk: the pixels (x, y) with x0 <= x < x1 have their centres in it.
+struct DiskRow {
+  std::int32_t y;
+  std::int32_t x0;
+  std::int32_t x1;
+};
+// The rows of the disk S, top to bottom (not clipped to any image).
+std::vector<DiskRow> disk_rows(Vec2 center, double radius);
+
+// A rectangle of the sensor's image, in pixels.
+struct Region {
+  int x = 0;
+  int y = 0;
+  int width = 0;
+  int height = 0;
+  friend bool operator==(const Region&, const Region&) = default;
+};
+
+// What a camera's region of interest must obey (GenICam OffsetX/OffsetY/Width/Height
+// increments); full_width keeps whole rows, for cameras that can only skip rows.
+struct RegionRules {
+  int offset_x_step = 1;
+  int offset_y_step = 1;
+  int width_step = 1;
+  int height_step = 1;
+  bool full_width = false;
+};
+
+// The smallest region that holds every pixel of every element's disk and obeys the rules:
+// offsets multiples of their steps, sizes multiples of theirs, inside the image (where the
+// steps cannot all be met inside the image, the side falls back to the whole image). Set the
+// camera to it and hand the extractor views with origin_x = x, origin_y = y: the measurement
+// is the same as on whole frames, with fewer rows to transfer and read (docs/benchmarks.md).
+// Throws CalibrationError for an invalid calibration, std::invalid_argument for steps < 1.
+Region region_of_interest(const Calibration& cal, RegionRules rules = {});
+
 }  // namespace tactile

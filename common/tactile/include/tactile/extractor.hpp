@@ -7,10 +7,16 @@
 #include <vector>
 
 #include "tactile/calibration.hpp"
+#include "tactile/detail/span.hpp"
 #include "tactile/image.hpp"
 #include "tactile/reading.hpp"
 
 namespace tactile {
+
+namespace detail {
+struct KernelSet;
+struct BlockData;
+}  // namespace detail
 
 // How the centroid (x_G, y_G) of a spot is estimated. All use the same increments
 // dg = g - g_ref over the element's disk S.
@@ -49,6 +55,13 @@ struct ExtractorOptions {
   double window_margin_px = 2.0;
   // kGaussian: the weight reaches this many weight-sigmas from the first estimate.
   double gaussian_reach_sigmas = 3.5;
+  // Accept frames that cover only part of the sensor (a camera region of interest, see
+  // region_of_interest() and ImageView::origin_x/origin_y) as long as they hold every disk.
+  // Off: only whole frames of the calibration's size are measured.
+  bool accept_regions = false;
+  // Use the portable per-pixel loops even where the processor has AVX2 (tests compare the two;
+  // the readings agree exactly except for kGaussian's floating-point rounding).
+  bool portable_kernels = false;
 };
 
 // Position of a frame in the camera's stream. `sequence` counts camera frames (lost frames
@@ -109,12 +122,7 @@ class Extractor {
   void forget_previous() noexcept;
 
  private:
-  struct Span {
-    std::int32_t y;
-    std::int32_t x0;
-    std::int32_t x1;           // exclusive
-    std::uint32_t ref_offset;  // index of (x0, y) in ref_q_
-  };
+  using Span = detail::Span;
   struct ElementLayout {
     std::uint32_t span_begin;
     std::uint32_t span_end;
@@ -126,26 +134,18 @@ class Extractor {
     double x_px = 0;
     double y_px = 0;
   };
-  struct Moments {
-    std::int64_t g = 0;      // sum of w (Q8), weights for G
-    std::int64_t c0 = 0;     // sum of centroid weights (Q8)
-    std::int64_t cx = 0;     // sum of weight * (x - origin_x)
-    std::int64_t cy = 0;     // sum of weight * (y - origin_y)
-    std::int64_t above = 0;  // pixels with a positive centroid weight
-    std::int32_t peak = 0;   // largest increment (Q8)
-  };
 
   bool geometry_matches(const ImageView& f) const;
-  template <typename Pixel>
-  Moments first_pass(const ElementLayout& el, const ImageView& f) const noexcept;
   template <typename Pixel>
   bool windowed_pass(const ElementLayout& el, const ImageView& f, double& x, double& y,
                      double half_width) const noexcept;
   template <typename Pixel>
-  bool gaussian_pass(const ElementLayout& el, const ImageView& f, double& x, double& y,
+  bool gaussian_pass(std::size_t element, const ImageView& f, double& x, double& y,
                      double& sigma) noexcept;
   template <typename Pixel>
   void measure_all(const ImageView& f, std::uint32_t gap) noexcept;
+  void build_thresholds();
+  detail::BlockData block_data() const noexcept;
   ReferenceResult complete_reference();
   ReferenceResult refuse(ReferenceStatus s, std::uint32_t id, double value);
 
@@ -155,7 +155,25 @@ class Extractor {
   std::vector<Span> spans_;
   std::vector<ElementLayout> layout_;
   std::vector<std::int32_t> ref_q_;  // reference mean in Q8 (x256), disk pixels only
+  std::vector<std::int32_t> thr_q_;  // ref_q_ + floor: the G threshold, disk pixels only
+  // Each element's disk padded to a block (detail::Block), and per block pixel, from the
+  // reference: the G threshold in Q8; the reference itself (the kPlain centroid threshold and
+  // the kGaussian baseline), with a value no pixel reaches outside the disk; and the G
+  // threshold split into whole gray levels (clamped to the pixel range) and the fraction, for
+  // the narrow-integer exact G of elements out of contact (src/kernels.hpp).
+  std::vector<detail::Block> blocks_;
+  std::vector<std::int32_t> blk_thr_;
+  std::vector<std::int32_t> blk_ref_;
+  std::vector<std::uint16_t> blk_thr16_;   // 8-bit sensors: blk_thr_ clamped to 65535
+  std::vector<std::uint16_t> blk_ref16_;   // 8-bit sensors: blk_ref_ clamped to 65535
+  std::vector<std::uint8_t> blk_ref_hi8_;  // 8-bit sensors: blk_ref_ split like the threshold
+  std::vector<std::uint8_t> blk_ref_lo_;
+  const detail::KernelSet* kernels_ = nullptr;
+  std::vector<std::uint8_t> blk_hi8_;
+  std::vector<std::uint16_t> blk_hi16_;
+  std::vector<std::uint8_t> blk_lo_;
   bool has_reference_ = false;
+  Region disks_;  // the smallest region holding every disk pixel
 
   Image reference_image_;
 
@@ -164,7 +182,7 @@ class Extractor {
   int capture_frames_ = 0;
 
   // Scratch for kGaussian's separable weights, sized at construction to the largest disk.
-  std::vector<double> wx_, wxu_, wxu2_, wy_;
+  std::vector<float> wx_, wxu_, wxu2_, wy_;
 
   std::vector<ElementState> state_;
   std::vector<ElementReading> readings_;

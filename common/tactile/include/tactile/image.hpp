@@ -19,12 +19,18 @@ inline std::size_t bytes_per_pixel(PixelFormat f) {
 
 // A borrowed view of one camera frame. Mono16 pixels are host-endian; x is the column index,
 // y the row index, and row y starts at data + y * stride_bytes.
+//
+// A camera set to a region of interest (region_of_interest() in calibration.hpp) delivers part
+// of the sensor's image: origin_x and origin_y say where the view's pixel (0, 0) lies on the
+// sensor. row() and at() take the view's own coordinates.
 struct ImageView {
   const std::uint8_t* data = nullptr;
   int width = 0;
   int height = 0;
   std::size_t stride_bytes = 0;
   PixelFormat format = PixelFormat::kMono8;
+  int origin_x = 0;
+  int origin_y = 0;
 
   template <typename Pixel>
   const Pixel* row(int y) const {

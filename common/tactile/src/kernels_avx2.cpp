@@ -1,0 +1,274 @@
+// AVX2 kernels for 8-bit pixels, compiled for AVX2 and FMA by function attribute only (the build
+// has no -mavx2), and used only where the processor has both (best_kernels()).
+//
+// Exact G and the thresholded moments come from one pass in 8-bit lanes, 32 pixels at a time:
+// s = max(p - hi, 0) is one saturating subtract; sums of s and of the fractions lo are SAD
+// instructions; sums of s * column are byte multiply-adds (column < 32 within a group of 32,
+// the group's start added through the group's sum of s). Everything is exact.
+#include "kernels.hpp"
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+
+#include <algorithm>
+
+#define TACTILE_AVX2 __attribute__((target("avx2,fma")))
+#define TACTILE_AVX2_INLINE __attribute__((target("avx2,fma"), always_inline)) inline
+
+namespace tactile::detail {
+namespace {
+
+TACTILE_AVX2_INLINE std::uint64_t sum_u64(__m256i v) noexcept {
+  const __m128i s = _mm_add_epi64(_mm256_castsi256_si128(v), _mm256_extracti128_si256(v, 1));
+  return static_cast<std::uint64_t>(_mm_cvtsi128_si64(s)) +
+         static_cast<std::uint64_t>(_mm_extract_epi64(s, 1));
+}
+
+// Sum of eight non-negative 32-bit lanes, in 64 bits.
+TACTILE_AVX2_INLINE __m256i widen_u32(__m256i v) noexcept {
+  return _mm256_add_epi64(_mm256_cvtepu32_epi64(_mm256_castsi256_si128(v)),
+                          _mm256_cvtepu32_epi64(_mm256_extracti128_si256(v, 1)));
+}
+
+struct Sums8 {
+  std::uint64_t s = 0, lo = 0, sx = 0, lx = 0, sy = 0, ly = 0;
+  std::int64_t above = 0;
+  std::int32_t peak = 0;
+};
+
+// One pass over a block whose width is a multiple of 32, with the threshold split (hi, lo).
+// kFractions: also the moments of the fractions lo (exact Q8 moments); without, the moments are
+// those of s alone (MomentKind::kStart).
+template <bool kMoments, bool kCount, bool kFractions = true>
+TACTILE_AVX2_INLINE Sums8 pass8(const Block& b, const FrameRef& f, const std::uint8_t* hi,
+                                const std::uint8_t* lo) noexcept {
+  const __m256i zero = _mm256_setzero_si256();
+  const __m256i ones16 = _mm256_set1_epi16(1);
+  const __m256i column =
+      _mm256_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21,
+                       22, 23, 24, 25, 26, 27, 28, 29, 30, 31);
+  __m256i acc_s = zero;   // u64 lanes
+  __m256i acc_l = zero;   // u64 lanes
+  __m256i acc_sy = zero;  // u64 lanes
+  __m256i acc_ly = zero;  // u64 lanes
+  __m256i acc_sg = zero;  // u64 lanes: group start * group sum of s
+  __m256i acc_lg = zero;
+  __m256i acc_sx = zero;  // u32 lanes, flushed into sx64
+  __m256i acc_lx = zero;
+  __m256i sx64 = zero;
+  __m256i lx64 = zero;
+  __m256i peak = zero;
+  std::int64_t above = 0;
+  // 32-bit column sums grow by at most 2 * 2 * 255 * 31 per group per lane.
+  const int groups = b.width / 32;
+  const int flush_rows = std::max(1, static_cast<int>((std::int64_t{1} << 31) / (groups * 31620)));
+  int since_flush = 0;
+  for (int r = 0; r < b.height; ++r) {
+    const std::uint8_t* p = f.pixel<std::uint8_t>(b.x0, b.y0 + r);
+    const std::size_t at =
+        b.offset + static_cast<std::size_t>(r) * static_cast<std::size_t>(b.width);
+    const std::uint8_t* h = hi + at;
+    const std::uint8_t* l = lo + at;
+    __m256i row_s = zero;
+    __m256i row_l = zero;
+    for (int g = 0; g < b.width; g += 32) {
+      const __m256i pv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + g));
+      const __m256i hv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h + g));
+      const __m256i lv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(l + g));
+      const __m256i s = _mm256_subs_epu8(pv, hv);
+      const __m256i none = _mm256_cmpeq_epi8(s, zero);
+      const __m256i lm = _mm256_andnot_si256(none, lv);
+      const __m256i ss = _mm256_sad_epu8(s, zero);
+      const __m256i ls = _mm256_sad_epu8(lm, zero);
+      row_s = _mm256_add_epi64(row_s, ss);
+      row_l = _mm256_add_epi64(row_l, ls);
+      if constexpr (kMoments) {
+        peak = _mm256_max_epu8(peak, s);
+        acc_sx =
+            _mm256_add_epi32(acc_sx, _mm256_madd_epi16(_mm256_maddubs_epi16(s, column), ones16));
+        if constexpr (kFractions) {
+          acc_lx =
+              _mm256_add_epi32(acc_lx, _mm256_madd_epi16(_mm256_maddubs_epi16(lm, column), ones16));
+        }
+        if (g > 0) {
+          const __m256i start = _mm256_set1_epi64x(g);
+          acc_sg = _mm256_add_epi64(acc_sg, _mm256_mul_epu32(ss, start));
+          if constexpr (kFractions) acc_lg = _mm256_add_epi64(acc_lg, _mm256_mul_epu32(ls, start));
+        }
+      }
+      if constexpr (kCount) {
+        above += 32 - __builtin_popcount(static_cast<unsigned>(_mm256_movemask_epi8(none)));
+      }
+    }
+    acc_s = _mm256_add_epi64(acc_s, row_s);
+    acc_l = _mm256_add_epi64(acc_l, row_l);
+    if constexpr (kMoments) {
+      const __m256i row = _mm256_set1_epi64x(r);
+      acc_sy = _mm256_add_epi64(acc_sy, _mm256_mul_epu32(row_s, row));
+      if constexpr (kFractions) acc_ly = _mm256_add_epi64(acc_ly, _mm256_mul_epu32(row_l, row));
+      if (++since_flush == flush_rows) {
+        sx64 = _mm256_add_epi64(sx64, widen_u32(acc_sx));
+        lx64 = _mm256_add_epi64(lx64, widen_u32(acc_lx));
+        acc_sx = zero;
+        acc_lx = zero;
+        since_flush = 0;
+      }
+    }
+  }
+  Sums8 out;
+  out.s = sum_u64(acc_s);
+  out.lo = sum_u64(acc_l);
+  if constexpr (kMoments) {
+    sx64 = _mm256_add_epi64(sx64, widen_u32(acc_sx));
+    lx64 = _mm256_add_epi64(lx64, widen_u32(acc_lx));
+    out.sx = sum_u64(sx64) + sum_u64(acc_sg);
+    out.lx = sum_u64(lx64) + sum_u64(acc_lg);
+    out.sy = sum_u64(acc_sy);
+    out.ly = sum_u64(acc_ly);
+    alignas(32) std::uint8_t pk[32];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(pk), peak);
+    out.peak = *std::max_element(pk, pk + 32);
+  }
+  out.above = above;
+  return out;
+}
+
+TACTILE_AVX2 GSum exact_g_u8(const Block& b, const FrameRef& f, const BlockData& d) noexcept {
+  if (b.width % 32 != 0) return portable_kernels().exact_g_u8(b, f, d);
+  const Sums8 s = pass8<false, false>(b, f, d.thr_hi8, d.thr_lo);
+  return {s.s, s.lo};
+}
+
+TACTILE_AVX2 Moments moments_u8(const Block& b, const FrameRef& f, const BlockData& d,
+                                MomentKind kind) noexcept {
+  if (b.width % 32 != 0) return portable_kernels().moments_u8(b, f, d, kind);
+  const auto to_moments = [](const Sums8& s) {
+    Moments m;
+    m.g = static_cast<std::int64_t>(256 * s.s - s.lo);
+    m.c0 = m.g;
+    m.cx = static_cast<std::int64_t>(256 * s.sx - s.lx);
+    m.cy = static_cast<std::int64_t>(256 * s.sy - s.ly);
+    m.above = s.above;
+    m.peak = s.peak;
+    return m;
+  };
+  switch (kind) {
+    case MomentKind::kThresholdedCount:
+      return to_moments(pass8<true, true>(b, f, d.thr_hi8, d.thr_lo));
+    case MomentKind::kPlain: {
+      // G with the floor, the centroid without: two passes.
+      Moments m = to_moments(pass8<true, false>(b, f, d.thr_hi8, d.thr_lo));
+      const Moments c = to_moments(pass8<true, false>(b, f, d.ref_hi8, d.ref_lo));
+      m.c0 = c.g;
+      m.cx = c.cx;
+      m.cy = c.cy;
+      return m;
+    }
+    case MomentKind::kStart: {
+      const Sums8 s = pass8<true, false, false>(b, f, d.thr_hi8, d.thr_lo);
+      Moments m;
+      m.g = static_cast<std::int64_t>(256 * s.s - s.lo);
+      m.c0 = static_cast<std::int64_t>(s.s);
+      m.cx = static_cast<std::int64_t>(s.sx);
+      m.cy = static_cast<std::int64_t>(s.sy);
+      m.peak = s.peak;
+      return m;
+    }
+    case MomentKind::kThresholded:
+      break;
+  }
+  return to_moments(pass8<true, false>(b, f, d.thr_hi8, d.thr_lo));
+}
+
+TACTILE_AVX2_INLINE double hsum(__m256 v) noexcept {
+  const __m128 s = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
+  const __m128 t = _mm_add_ps(s, _mm_movehl_ps(s, s));
+  return static_cast<double>(_mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1))));
+}
+
+// One group of 8 pixels of a row: d = 256 p - ref (0 outside the disk) times the column
+// weights, into three partial sums.
+TACTILE_AVX2_INLINE void gauss_group(const std::uint8_t* p, const std::int32_t* rf,
+                                     const GaussWindow& w, int k, __m256i outside, __m256& s0,
+                                     __m256& s1, __m256& s2) noexcept {
+  const __m256i pv = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + k)));
+  __m256i dv = _mm256_sub_epi32(_mm256_slli_epi32(pv, 8),
+                                _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rf + k)));
+  // Pixels outside the disk carry a huge reference: their increment is far below -2^29.
+  dv = _mm256_and_si256(dv, _mm256_cmpgt_epi32(dv, outside));
+  const __m256 df = _mm256_cvtepi32_ps(dv);
+  s0 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wx + k), s0);
+  s1 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wxu + k), s1);
+  s2 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wxu2 + k), s2);
+}
+
+TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockData& d,
+                                const GaussWindow& w) noexcept {
+  if (b.width % 8 != 0) return portable_kernels().gauss_u8(b, f, d, w);
+  const int c_lo = std::max(0, w.col_lo - b.x0) / 8 * 8;
+  const int c_hi = std::min(b.width, w.col_hi - b.x0 + 1);
+  const __m256i outside = _mm256_set1_epi32(-(kOutsideDisk / 2));
+  __m256 t0 = _mm256_setzero_ps();
+  __m256 t1x = _mm256_setzero_ps();
+  __m256 t2x = _mm256_setzero_ps();
+  __m256 t1y = _mm256_setzero_ps();
+  __m256 t2y = _mm256_setzero_ps();
+  for (int y = w.row_lo; y <= w.row_hi; ++y) {
+    const int r = y - b.y0;
+    const std::uint8_t* p = f.pixel<std::uint8_t>(b.x0, y);
+    const std::int32_t* rf =
+        d.ref + b.offset + static_cast<std::size_t>(r) * static_cast<std::size_t>(b.width);
+    // Two sets of partial sums, for even and odd groups: shorter dependency chains.
+    __m256 a0 = _mm256_setzero_ps();
+    __m256 a1 = _mm256_setzero_ps();
+    __m256 a2 = _mm256_setzero_ps();
+    __m256 b0 = _mm256_setzero_ps();
+    __m256 b1 = _mm256_setzero_ps();
+    __m256 b2 = _mm256_setzero_ps();
+    int k = c_lo;
+    for (; k + 8 < c_hi; k += 16) {
+      gauss_group(p, rf, w, k, outside, a0, a1, a2);
+      gauss_group(p, rf, w, k + 8, outside, b0, b1, b2);
+    }
+    if (k < c_hi) gauss_group(p, rf, w, k, outside, a0, a1, a2);
+    a0 = _mm256_add_ps(a0, b0);
+    a1 = _mm256_add_ps(a1, b1);
+    a2 = _mm256_add_ps(a2, b2);
+    const float wy = w.wy[y - w.row_lo];
+    const auto v = static_cast<float>(y - w.cy);
+    const __m256 wyv = _mm256_set1_ps(wy);
+    t0 = _mm256_fmadd_ps(a0, wyv, t0);
+    t1x = _mm256_fmadd_ps(a1, wyv, t1x);
+    t2x = _mm256_fmadd_ps(a2, wyv, t2x);
+    t1y = _mm256_fmadd_ps(a0, _mm256_set1_ps(wy * v), t1y);
+    t2y = _mm256_fmadd_ps(a0, _mm256_set1_ps(wy * v * v), t2y);
+  }
+  return {hsum(t0), hsum(t1x), hsum(t2x), hsum(t1y), hsum(t2y)};
+}
+
+}  // namespace
+
+const KernelSet* avx2_kernels() noexcept {
+  static const KernelSet kSet{"avx2",
+                              exact_g_u8,
+                              portable_kernels().exact_g_u16,
+                              moments_u8,
+                              portable_kernels().moments_u16,
+                              gauss_u8,
+                              portable_kernels().gauss_u16};
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") ? &kSet : nullptr;
+}
+
+}  // namespace tactile::detail
+
+#else
+
+namespace tactile::detail {
+
+const KernelSet* avx2_kernels() noexcept {
+  return nullptr;
+}
+
+}  // namespace tactile::detail
+
+#endif
