@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <string>
 
+#include "tactile/config/calibration_file.hpp"
 #include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/plots.hpp"
 #include "tactile/rig/scenario.hpp"
@@ -27,6 +28,7 @@ int run(int argc, char** argv) {
   std::string plots_dir;
   std::string timing_path;
   std::string series_path;
+  std::string calibration_dir;
   bool lockstep = false;
   double dt_s = 0;
   std::string log_level = "info";
@@ -38,6 +40,8 @@ int run(int argc, char** argv) {
   app.add_option("--series", series_path,
                  "write the per-frame series (CSV) here, and beside it the element-frames where "
                  "measured and true slip disagree");
+  app.add_option("--calibration-dir", calibration_dir,
+                 "write the simulated sensors' calibration files (left.yaml, right.yaml) here");
   app.add_option("--dt", dt_s, "physics step (s), overriding the scenario's")
       ->check(CLI::Range(1e-7, 1e-3));
   app.add_option("--log-level", log_level, "debug, info, warn or error");
@@ -91,6 +95,14 @@ int run(int argc, char** argv) {
         timing_path, fmt::format("{{\"wall_s\": {:.4f}, \"cpu_s\": {:.4f}, \"sim_time_s\": {:.4f}, "
                                  "\"wall_over_sim\": {:.5f}, \"cpu_over_sim\": {:.5f}}}\n",
                                  wall_s, cpu_s, sim_s, ratio, cpu_ratio));
+  }
+  if (!calibration_dir.empty()) {
+    for (const tactile::Calibration& cal : result.calibrations) {
+      const std::filesystem::path path =
+          std::filesystem::path(calibration_dir) / (cal.sensor_id + ".yaml");
+      tactile::config::save_calibration(path, cal);
+      tactile::util::log_info("wrote {}", path.string());
+    }
   }
   if (!series_path.empty()) {
     tactile::util::write_file_atomic(series_path, tactile::rig::series_csv(result.series));

@@ -192,8 +192,14 @@ void World::update_arm(double dt) noexcept {
   // wrist alone does not.
   const double target =
       std::min(1.0, norm(arm_.velocity_mps) / std::max(p_.arm.vibration_full_speed_mps, 1e-6));
-  const double rise = std::max(p_.arm.vibration_rise_s, dt);
-  arm_.vibration_envelope += (target - arm_.vibration_envelope) * (dt / rise);
+  // It builds up over vibration_rise_s; once the arm brakes, the held servos damp the mode
+  // critically, within 1 / (2 pi f).
+  const double fade = p_.arm.vibration_hz > 0 ? 1.0 / (2.0 * kPi * p_.arm.vibration_hz) : dt;
+  const double tau =
+      std::max(target >= arm_.vibration_envelope ? p_.arm.vibration_rise_s
+                                                 : std::min(p_.arm.vibration_rise_s, fade),
+               dt);
+  arm_.vibration_envelope += (target - arm_.vibration_envelope) * (dt / tau);
   const double phase = 2.0 * kPi * p_.arm.vibration_hz * (t_ + dt);
   arm_.vibration_m = {0, 0, p_.arm.vibration_m * arm_.vibration_envelope * std::sin(phase)};
 }
