@@ -443,23 +443,39 @@ bool Extractor::windowed_pass(const ElementLayout& el, const ImageView& f, doubl
   return true;
 }
 
-// Fills w[k] = exp(-(first + k - c)^2 / (2 s^2)) for k in [0, n) by a recurrence (two exp
-// calls, in float: the weights need no more), with w*u and w*u^2 beside it where
-// u = first + k - c.
+// Fills w[k] = exp(-(first + k - c)^2 / (2 s^2)) for k in [0, n), with w*u and w*u^2 beside it
+// where u = first + k - c. A recurrence outward from the pixel nearest c in each direction: every
+// factor is at most 1, so nothing overflows and far weights underflow to 0 gracefully, and the
+// rounding is the same on both sides (no bias). Seeds from float exp, products in double;
 // b = exp(-2a), a = 1 / (2 s^2), is shared by the two axes.
-static void gaussian_weights(int first, int n, double c, float a, float b, float* w, float* wu,
+static void gaussian_weights(int first, int n, double c, double a, double b, float* w, float* wu,
                              float* wu2) noexcept {
-  auto u = static_cast<float>(first - c);
-  float wk = std::exp(-a * u * u);
-  float step = std::exp(-a * (2.0F * u + 1.0F));
-  for (int k = 0; k < n; ++k, u += 1.0F) {
-    w[k] = wk;
+  const int kc = std::clamp(static_cast<int>(std::lround(c)) - first, 0, n - 1);
+  const double uc = first + kc - c;
+  const auto put = [&](int k, double wk) {
+    const double u = first + k - c;
+    w[k] = static_cast<float>(wk);
     if (wu != nullptr) {
-      wu[k] = wk * u;
-      wu2[k] = wk * u * u;
+      wu[k] = static_cast<float>(wk * u);
+      wu2[k] = static_cast<float>(wk * u * u);
     }
+  };
+  const auto e = [](double v) { return static_cast<double>(std::exp(static_cast<float>(v))); };
+  const double w0 = e(-a * uc * uc);
+  put(kc, w0);
+  double wk = w0;
+  double step = e(-a * (2 * uc + 1));
+  for (int k = kc + 1; k < n; ++k) {
     wk *= step;
     step *= b;
+    put(k, wk);
+  }
+  wk = w0;
+  step = e(-a * (1 - 2 * uc));
+  for (int k = kc - 1; k >= 0; --k) {
+    wk *= step;
+    step *= b;
+    put(k, wk);
   }
 }
 
@@ -485,8 +501,8 @@ bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x
     wx_[k] = wxu_[k] = wxu2_[k] = 0.0F;
   for (int k = end; k < std::min(b.width, (end + 15) / 16 * 16); ++k)
     wx_[k] = wxu_[k] = wxu2_[k] = 0.0F;
-  const auto a = static_cast<float>(1.0 / (2.0 * s * s));
-  const float ratio = std::exp(-2.0F * a);
+  const double a = 1.0 / (2.0 * s * s);
+  const double ratio = std::exp(-2.0 * a);
   gaussian_weights(col_lo, end - first, x, a, ratio, wx_.data() + first, wxu_.data() + first,
                    wxu2_.data() + first);
   gaussian_weights(row_lo, row_hi - row_lo + 1, y, a, ratio, wy_.data(), nullptr, nullptr);
