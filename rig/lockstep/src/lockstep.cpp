@@ -198,7 +198,6 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
 
   control::GraspMoveTwistController controller(cfg);
   control::Phase phase = control::Phase::kIdle;
-  std::uint32_t twist_cycle = 0;
   bool done_seen = false;
   double done_at = 0;
   double dropped_at = -1;
@@ -432,7 +431,6 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
 
     world.apply(to_arm_command(out.command));
     phase = out.phase;
-    twist_cycle = out.twist_cycle;
     rep.twist_cycles = static_cast<int>(
         std::max<std::uint32_t>(static_cast<std::uint32_t>(rep.twist_cycles), out.twist_cycle));
     rep.final_cap_angle_deg = gt.cap_angle_deg;
@@ -449,7 +447,6 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
       break;
     }
   }
-  (void)twist_cycle;
 
   // Onsets still waiting at the end were never covered.
   for (auto& tip : score) {

@@ -86,7 +86,7 @@ class Renderer {
   double expected_g(std::size_t k, double p) const;
   // The drawn strength whose expected measured G is `g` (0 for g at or below the noise's own).
   double strength_for_g(std::size_t k, double g) const;
-  // Pixels redrawn (noiseless part recomputed) by the last render().
+  // Spots whose noiseless pixels the last render() recomputed (their load changed).
   std::size_t redrawn_spots() const { return redrawn_; }
   // Noise standard deviation of a background pixel at (x, y), output gray levels.
   double pixel_sigma(double value_levels) const;
