@@ -1,0 +1,278 @@
+// tactile_record: subscribes to sensor_node, hand_node and rig publishers and writes every message,
+// with its topic, source and receive time, to one log file (docs/recording.md).
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "tactile/recording/log_writer.hpp"
+#include "tactile/recording/raw_frame.hpp"
+#include "tactile/recording/sources.hpp"
+#include "tactile/util/clock.hpp"
+#include "tactile/util/log.hpp"
+#include "tactile/util/stop.hpp"
+#include "tactile/wire/envelope.hpp"
+
+namespace {
+
+using tactile::recording::LogWriter;
+using tactile::recording::Sources;
+using tactile::recording::WriteStatus;
+
+constexpr const char* kVersion = "tactile_record 0.1.0";
+
+struct Options {
+  std::vector<std::string> endpoints;
+  std::vector<std::string> curve;
+  std::string client_key;
+  std::string output;
+  std::vector<std::string> topics{"frame/", "stats/", "event", "truth"};
+  bool raw_frames = false;
+  double duration_s = 0;
+  std::uint64_t count = 0;
+  int level = 3;
+  std::size_t frame_kib = 1024;
+  double flush_interval_s = 1.0;
+  bool fsync = false;
+  bool overwrite = false;
+  std::string note;
+  double progress_s = 10.0;
+  std::string log_level = "info";
+};
+
+// Counts per topic, and lost TactileFrames per sensor (gaps in TactileFrame.sequence). Topics
+// are few: a linear search over them allocates nothing once every topic has been seen.
+class TopicCounts {
+ public:
+  void add(std::string_view topic, const zmq::message_t& payload) {
+    Entry* e = find(topic);
+    ++e->count;
+    if (topic.starts_with("frame/")) {
+      const auto* data = static_cast<const std::uint8_t*>(payload.data());
+      if (tactile::wire::decode({data, payload.size()}, envelope_) ==
+              tactile::wire::DecodeStatus::kOk &&
+          envelope_.has_tactile_frame()) {
+        const std::uint64_t seq = envelope_.tactile_frame().sequence();
+        if (e->has_sequence && seq > e->last_sequence + 1) e->lost += seq - e->last_sequence - 1;
+        if (!e->has_sequence || seq > e->last_sequence) e->last_sequence = seq;
+        e->has_sequence = true;
+      } else {
+        ++e->undecodable;
+      }
+    }
+  }
+  std::string summary() const {
+    std::string s;
+    for (const auto& e : entries_) {
+      if (!s.empty()) s += ", ";
+      s += fmt::format("{} {}", e.topic, e.count);
+      if (e.lost > 0) s += fmt::format(" ({} lost)", e.lost);
+      if (e.undecodable > 0) s += fmt::format(" ({} undecodable)", e.undecodable);
+    }
+    return s.empty() ? "nothing" : s;
+  }
+
+ private:
+  struct Entry {
+    std::string topic;
+    std::uint64_t count = 0;
+    bool has_sequence = false;
+    std::uint64_t last_sequence = 0;
+    std::uint64_t lost = 0;
+    std::uint64_t undecodable = 0;
+  };
+  Entry* find(std::string_view topic) {
+    for (auto& e : entries_) {
+      if (e.topic == topic) return &e;
+    }
+    entries_.push_back(Entry{std::string(topic)});
+    return &entries_.back();
+  }
+  std::vector<Entry> entries_;
+  tactile::v1::Envelope envelope_;
+};
+
+std::string default_output() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char name[64];
+  std::strftime(name, sizeof name, "tactile-%Y%m%d-%H%M%S.tlog", &tm);
+  return name;
+}
+
+std::string host_name() {
+  char h[256] = {};
+  if (gethostname(h, sizeof h - 1) != 0) return {};
+  return h;
+}
+
+int run(Options opt) {
+  tactile::util::set_log_level(tactile::util::parse_log_level(opt.log_level));
+  if (opt.duration_s < 0) throw std::invalid_argument("--duration must not be negative");
+  if (!(opt.flush_interval_s > 0)) throw std::invalid_argument("--flush-interval must be positive");
+  if (!(opt.progress_s >= 0)) throw std::invalid_argument("--progress must not be negative");
+  if (opt.raw_frames) opt.topics.emplace_back(tactile::recording::kRawTopicPrefix);
+  if (opt.output.empty()) opt.output = default_output();
+
+  tactile::recording::SourceOptions so;
+  so.endpoints = opt.endpoints;
+  for (const auto& c : opt.curve)
+    so.curve.push_back(tactile::recording::parse_curve_source(c));
+  so.client_key = opt.client_key;
+  so.topics = opt.topics;
+
+  tactile::util::install_stop_handlers();
+  zmq::context_t ctx;
+  Sources sources(ctx, so);
+
+  tactile::v1::LogHeader header;
+  header.set_created_ns(tactile::util::realtime_ns());
+  header.set_writer(kVersion);
+  header.set_host(host_name());
+  header.set_note(opt.note);
+  for (auto& s : sources.describe())
+    *header.add_sources() = std::move(s);
+
+  tactile::recording::LogWriterOptions wo;
+  wo.level = opt.level;
+  wo.frame_bytes = opt.frame_kib * 1024;
+  wo.flush_interval = std::chrono::duration_cast<std::chrono::nanoseconds>(
+      std::chrono::duration<double>(opt.flush_interval_s));
+  wo.sync = opt.fsync;
+  wo.overwrite = opt.overwrite;
+  LogWriter writer(opt.output, header, wo);
+
+  std::string topics;
+  for (const auto& t : opt.topics)
+    topics += (topics.empty() ? "" : " ") + (t.empty() ? std::string("(all)") : t);
+  for (std::size_t i = 0; i < sources.size(); ++i) {
+    tactile::util::log_info("subscribed to {}{} topics {}", sources.endpoint(i),
+                            sources.curve(i) ? " (CURVE)" : "", topics);
+  }
+  tactile::util::log_info("recording to {}", opt.output);
+
+  const std::int64_t start = tactile::util::monotonic_ns();
+  const std::int64_t end =
+      opt.duration_s > 0 ? start + static_cast<std::int64_t>(opt.duration_s * 1e9) : INT64_MAX;
+  std::int64_t next_progress =
+      opt.progress_s > 0 ? start + static_cast<std::int64_t>(opt.progress_s * 1e9) : INT64_MAX;
+  TopicCounts counts;
+  Sources::Message m;
+  std::uint64_t received = 0;
+  int code = 0;
+  while (!tactile::util::stop_requested()) {
+    const std::int64_t now = tactile::util::monotonic_ns();
+    if (now >= end || (opt.count > 0 && received >= opt.count)) break;
+    if (now >= next_progress) {
+      tactile::util::log_info("{} messages, {:.1f} MiB written: {}", received,
+                              static_cast<double>(writer.bytes_out()) / (1 << 20),
+                              counts.summary());
+      next_progress = now + static_cast<std::int64_t>(opt.progress_s * 1e9);
+    }
+    const auto wait = std::chrono::milliseconds(
+        std::clamp<std::int64_t>((std::min(end, next_progress) - now) / 1000000, 1, 50));
+    if (sources.receive(m, wait)) {
+      const std::string_view topic(static_cast<const char*>(m.topic.data()), m.topic.size());
+      const auto kind = topic.starts_with(tactile::recording::kRawTopicPrefix)
+                            ? tactile::v1::PAYLOAD_KIND_RAW_FRAME
+                            : tactile::v1::PAYLOAD_KIND_ENVELOPE;
+      const WriteStatus s =
+          writer.append(tactile::util::realtime_ns(), topic, sources.endpoint(m.source), kind,
+                        {static_cast<const std::uint8_t*>(m.payload.data()), m.payload.size()});
+      if (s != WriteStatus::kOk) {
+        code = 1;
+        break;
+      }
+      counts.add(topic, m.payload);
+      ++received;
+    }
+    if (writer.poll() != WriteStatus::kOk) {
+      code = 1;
+      break;
+    }
+  }
+  if (writer.close() != WriteStatus::kOk) code = 1;
+  if (code != 0) {
+    tactile::util::log_error("{}", writer.error());
+    std::fprintf(stderr, "tactile_record: %s\n", writer.error().c_str());
+  }
+  const double seconds = static_cast<double>(tactile::util::monotonic_ns() - start) * 1e-9;
+  tactile::util::log_info(
+      "recorded {} messages in {:.1f} s to {} ({:.2f} MiB, {:.2f} MiB before compression, {} zstd "
+      "frames): {}{}",
+      writer.records(), seconds, opt.output, static_cast<double>(writer.bytes_out()) / (1 << 20),
+      static_cast<double>(writer.bytes_in()) / (1 << 20), writer.frames(), counts.summary(),
+      sources.malformed() > 0 ? fmt::format("; {} malformed dropped", sources.malformed()) : "");
+  return code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  tactile::util::set_program_name("tactile_record");
+  Options opt;
+  CLI::App app{
+      "Records every message of sensor_node, hand_node and rig publishers (TactileFrames, "
+      "SensorStats, Events, GroundTruth; raw camera frames when asked) with its topic, source "
+      "and receive time into one zstd-compressed log file (docs/recording.md). Stops cleanly on "
+      "SIGINT or SIGTERM."};
+  app.add_option("endpoints", opt.endpoints,
+                 "publishers to subscribe to, e.g. tcp://127.0.0.1:5555 (sensor_node), the "
+                 "hand_node events endpoint, tcp://127.0.0.1:5557 (rig ground truth)");
+  app.add_option("--curve", opt.curve,
+                 "ENDPOINT=SERVER.pub: subscribe to ENDPOINT with CURVE, trusting the publisher "
+                 "whose public key is in the file (repeatable; docs/security.md)");
+  app.add_option("--client-key", opt.client_key,
+                 "this recorder's CURVE key pair (a .key file of tactile_keygen); default: a fresh "
+                 "pair for this run");
+  app.add_option("-o,--output", opt.output,
+                 "log file to write (default tactile-YYYYmmdd-HHMMSS.tlog, UTC)");
+  app.add_option("--topic", opt.topics,
+                 "topic prefix to record (repeatable; \"\" records every topic)")
+      ->capture_default_str();
+  app.add_flag("--raw-frames", opt.raw_frames,
+               "also record raw camera frames (topic raw/<sensor_id>, published by a sensor when "
+               "asked; docs/recording.md)");
+  app.add_option("--duration", opt.duration_s, "stop after this many seconds (0: until a signal)");
+  app.add_option("--count", opt.count, "stop after this many messages (0: no limit)");
+  app.add_option("--level", opt.level, "zstd compression level, 1 (fast) .. 19 (small)")
+      ->capture_default_str();
+  app.add_option("--frame-kib", opt.frame_kib,
+                 "close a zstd frame once this many KiB of records are buffered")
+      ->capture_default_str();
+  app.add_option("--flush-interval", opt.flush_interval_s,
+                 "seconds a record may wait in memory before its frame is written (what a crash "
+                 "can lose)")
+      ->capture_default_str();
+  app.add_flag("--fsync", opt.fsync, "fdatasync the file after every frame");
+  app.add_flag("--overwrite", opt.overwrite, "replace an existing output file");
+  app.add_option("--note", opt.note, "free text stored in the log's header");
+  app.add_option("--progress", opt.progress_s, "seconds between progress lines (0: none)")
+      ->capture_default_str();
+  app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "tactile_record: %s (try --help)\n", e.what());
+    return 2;
+  }
+  if (opt.endpoints.empty() && opt.curve.empty()) {
+    std::fprintf(stderr,
+                 "tactile_record: give at least one endpoint to subscribe to (try --help)\n");
+    return 2;
+  }
+  try {
+    return run(std::move(opt));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tactile_record: %s\n", e.what());
+    return 1;
+  }
+}
