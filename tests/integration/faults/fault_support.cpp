@@ -267,7 +267,11 @@ TruthReport check_against_truth(const std::vector<v1::TactileFrame>& frames,
     }
     const camera::FrameSequencer::Step step = sequencer.next(f.camera_frame_id());
     sequences_seen.insert(step.sequence);
-    if (step.late) ++r.late;
+    if (step.late) {
+      ++r.stale_id;
+      // What the camera seam cannot place in the stream must never be measured.
+      if (f.status() == v1::FRAME_STATUS_COMPLETE) fail(where + ": COMPLETE with an old block id");
+    }
     const std::uint64_t skipped = step.late || step.first_after_start ? 0 : step.frames_lost;
     if (i > 0 && f.frames_skipped() != skipped) {
       fail(fmt::format("{}: frames_skipped {}, the block ids say {}", where, f.frames_skipped(),
@@ -349,10 +353,10 @@ std::string describe(const TruthReport& r) {
     statuses += fmt::format(" {}={}", v1::FrameStatus_Name(static_cast<v1::FrameStatus>(s)), n);
   }
   std::string s = fmt::format(
-      "{} frames: {} complete, {} incomplete ({} ), {} late; {} skipped on the wire, {} never "
-      "received; complete after a gap {}, after a complete frame {}; displacements {} ({} after "
-      "a gap); {} readings checked",
-      r.frames, r.complete, r.incomplete, statuses, r.late, r.frames_lost, r.never_received,
+      "{} frames: {} complete, {} incomplete ({} ), {} with an old block id; {} skipped on the "
+      "wire, {} block ids not seen; complete after a gap {}, after a complete frame {}; "
+      "displacements {} ({} after a gap); {} readings checked",
+      r.frames, r.complete, r.incomplete, statuses, r.stale_id, r.frames_lost, r.never_received,
       r.complete_after_gap, r.complete_after_complete, r.displacements_measured,
       r.displacements_after_gap, r.readings_checked);
   for (const auto& f : r.failures)

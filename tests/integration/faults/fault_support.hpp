@@ -112,8 +112,12 @@ struct TruthReport {
   std::size_t incomplete = 0;           // any status but COMPLETE
   std::map<int, std::size_t> statuses;  // FrameStatus -> count
   std::uint64_t frames_lost = 0;        // sum of frames_skipped
-  std::size_t late = 0;            // frames that came after a newer one (closed incomplete late)
-  std::size_t never_received = 0;  // camera frames (block ids) that never reached the wire
+  // Frames whose block id is not newer than the newest seen. In every run so far each was an
+  // incomplete frame whose leader packet was lost: Aravis 0.8 sets a buffer's frame id and
+  // timestamp from the leader only, so such a frame carries those of the buffer's previous use
+  // (buffer_count frames earlier), and its true id shows as a gap (docs/reliability.md).
+  std::size_t stale_id = 0;
+  std::size_t never_received = 0;  // block ids in the range seen that no frame on the wire carries
   std::size_t complete_after_gap = 0;           // COMPLETE after a lost or incomplete frame
   std::size_t complete_after_complete = 0;      // COMPLETE right after a COMPLETE frame
   std::size_t displacements_measured = 0;       // element readings with has_displacement
