@@ -80,13 +80,18 @@ DecodeStatus read_tactile_frame(const v1::TactileFrame& in, const Calibration& c
       if (!std::isfinite(v)) return DecodeStatus::kInvalid;
     }
     if (e.g() < 0) return DecodeStatus::kInvalid;
+    // A finite centroid in mm can still overflow to infinity in pixels (fuzzing found
+    // y_mm = -1.5e308): the core's units must be finite too.
+    const double x_px = e.x_mm() * px_per_mm;
+    const double y_px = e.y_mm() * px_per_mm;
+    if (!std::isfinite(x_px) || !std::isfinite(y_px)) return DecodeStatus::kInvalid;
     ElementReading& r = out.elements[k];
     r.id = e.id();
     r.contact = e.contact();
     r.has_displacement = e.has_displacement() && e.contact();
     r.G = e.g();
-    r.x_px = e.x_mm() * px_per_mm;
-    r.y_px = e.y_mm() * px_per_mm;
+    r.x_px = x_px;
+    r.y_px = y_px;
     r.dx_mm = e.dx_mm();
     r.dy_mm = e.dy_mm();
     r.ux_mm = e.ux_mm();
