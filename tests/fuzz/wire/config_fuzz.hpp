@@ -61,7 +61,10 @@ void expect_loaded_or_config_error(Load&& load) {
   } catch (const config::ConfigError& e) {
     const std::string what = e.what();
     require(!what.empty(), "ConfigError without a message");
-    require(what.find('\n') == std::string::npos, "ConfigError message is not one line");
+    if (what.find('\n') != std::string::npos) {
+      std::fprintf(stderr, "message: [%s]\n", what.c_str());
+      require(false, "ConfigError message is not one line");
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "escaped exception (not ConfigError): %s\n", e.what());
     require(false, "an exception other than ConfigError escaped the loader");

@@ -27,6 +27,11 @@ void check_round_trip(v1::Envelope& env) {
 
 }  // namespace
 
+extern "C" int LLVMFuzzerInitialize(int* /*argc*/, char*** /*argv*/) {
+  tactile::fuzz::silence_protobuf_log();
+  return 0;
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const Calibration cal = fuzz::wire_calibration();
   // Reused across inputs, as the programs reuse theirs.

@@ -106,8 +106,8 @@ std::vector<v1::ArmCommand> arm_commands() {
   std::uint64_t sequence = 1;
   for (const auto& c : commands) {
     out.emplace_back();
-    wire::fill_arm_command(c, sequence++, 1'700'000'000'000'000'000, answers,
-                           fuzz::kFingertipIds, out.back());
+    wire::fill_arm_command(c, sequence++, 1'700'000'000'000'000'000, answers, fuzz::kFingertipIds,
+                           out.back());
   }
   return out;
 }
@@ -292,15 +292,52 @@ int main(int argc, char** argv) {
     // keys are many, and a mutation seldom spells one.
     std::ofstream dict(root / "config.dict");
     std::vector<std::string> keys = config::controller_config_keys();
-    for (const char* k :
-         {"format", "tactile-sensor/1", "tactile-hand/1", "publish", "stats_period_s",
-          "measurement", "estimator", "reference_frames", "reference_spot_check", "max_gap_frames",
-          "cameras", "sensor_id", "camera", "calibration", "reference", "reference_cache", "fps",
-          "packet_size", "socket_buffer_bytes", "buffers", "interface", "packet_resend",
-          "frame_timeout_s", "retry_initial_s", "retry_max_s", "security", "secret_key",
-          "sensor_public_key", "arm_public_key", "fingertips", "subscribe", "arm", "events",
-          "heartbeat_period_s", "control_period_s", "arm_timeout_s", "controller", "left.yaml",
-          "right.yaml", "plain", "thresholded", "windowed", "gaussian", ".nan", ".inf", "~"}) {
+    for (const char* k : {"format",
+                          "tactile-sensor/1",
+                          "tactile-hand/1",
+                          "publish",
+                          "stats_period_s",
+                          "measurement",
+                          "estimator",
+                          "reference_frames",
+                          "reference_spot_check",
+                          "max_gap_frames",
+                          "cameras",
+                          "sensor_id",
+                          "camera",
+                          "calibration",
+                          "reference",
+                          "reference_cache",
+                          "fps",
+                          "packet_size",
+                          "socket_buffer_bytes",
+                          "buffers",
+                          "interface",
+                          "packet_resend",
+                          "frame_timeout_s",
+                          "retry_initial_s",
+                          "retry_max_s",
+                          "security",
+                          "secret_key",
+                          "sensor_public_key",
+                          "arm_public_key",
+                          "fingertips",
+                          "subscribe",
+                          "arm",
+                          "events",
+                          "heartbeat_period_s",
+                          "control_period_s",
+                          "arm_timeout_s",
+                          "controller",
+                          "left.yaml",
+                          "right.yaml",
+                          "plain",
+                          "thresholded",
+                          "windowed",
+                          "gaussian",
+                          ".nan",
+                          ".inf",
+                          "~"}) {
       keys.emplace_back(k);
     }
     for (const auto& k : keys)

@@ -6,6 +6,11 @@
 
 #include "wire_checks.hpp"
 
+extern "C" int LLVMFuzzerInitialize(int* /*argc*/, char*** /*argv*/) {
+  tactile::fuzz::silence_protobuf_log();
+  return 0;
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace tactile;
   static const Calibration cal = fuzz::wire_calibration();

@@ -1,6 +1,8 @@
 #pragma once
 
 // The promises of each wire decoder, checked on every input it accepts.
+#include <google/protobuf/stubs/logging.h>
+
 #include <cmath>
 #include <cstring>
 
@@ -8,6 +10,12 @@
 #include "tactile/wire/tactile_frame.hpp"
 
 namespace tactile::fuzz {
+
+// Protobuf logs every string field that is not UTF-8 to stderr; at fuzzing rates that drowns
+// the findings. (The programs do log them: see docs/reliability.md.)
+inline void silence_protobuf_log() {
+  google::protobuf::SetLogHandler(nullptr);
+}
 
 inline bool finite(const Vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
