@@ -46,8 +46,10 @@ std::vector<Method> methods() {
   using K = Method::Kind;
   using E = CentroidEstimator;
   std::vector<Method> m;
-  m.push_back({"gaussian", K::kCore, E::kGaussian, 2.0, 2.0, 3.5, true});
-  m.push_back({"gaussian_reach3", K::kCore, E::kGaussian, 2.0, 2.0, 3.0, false});
+  const ExtractorOptions defaults;
+  m.push_back({"gaussian", K::kCore, E::kGaussian, 2.0, defaults.window_margin_px,
+               defaults.gaussian_reach_sigmas, true});
+  m.push_back({"gaussian_reach3.5", K::kCore, E::kGaussian, 2.0, 2.0, 3.5, false});
   m.push_back({"gaussian_reach2.5", K::kCore, E::kGaussian, 2.0, 2.0, 2.5, false});
   m.push_back({"plain", K::kCore, E::kPlain, 2.0, 2.0, 3.5, false});
   m.push_back({"thresholded", K::kCore, E::kThresholded, 2.0, 2.0, 3.5, false});
