@@ -1,0 +1,206 @@
+// tactile_live's screen as a pure function of its state: golden texts of a fixed state in a
+// large, a narrow and a tiny window, with and without colour; and the model fed real messages.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+
+#include "dashboard.hpp"
+#include "tactile/util/files.hpp"
+#include "tactile/wire/envelope.hpp"
+
+namespace tactile::live {
+namespace {
+
+LiveState fixed_state() {
+  LiveState s;
+  s.now_ns = 1'763'700'000'123'000'000;  // a fixed instant
+  s.messages = 12345;
+  s.phase = "TWIST_TURN";
+  s.cycle = 2;
+  s.rates = {{"frame/left", 100.0}, {"frame/right", 99.5}, {"event", 0.5}, {"stats/left", 1.0}};
+  for (const char* id : {"left", "right"}) {
+    FingertipView f;
+    f.id = id;
+    f.sequence = std::string(id) == "left" ? 4242 : 4240;
+    f.status = "COMPLETE";
+    f.fps = std::string(id) == "left" ? 100.0 : 99.5;
+    f.lost = std::string(id) == "left" ? 0 : 2;
+    for (std::uint32_t e = 0; e < 41; ++e) {
+      ElementCell c;
+      c.id = e;
+      if (std::string(id) == "left" && (e < 9 || e == 20 || e == 33)) {
+        c.contact = true;
+        c.fz_n = 0.3 * e;
+        c.slip = e == 3 || e == 20;
+      }
+      f.elements.push_back(c);
+    }
+    if (std::string(id) == "left") {
+      f.touch = true;
+      f.slip = true;
+      f.max_fz_n = 9.9;
+      f.over = true;
+      f.max_slip_mm = 0.0061;
+      f.has_stats = true;
+      f.camera_frames = 4300;
+      f.incomplete = 3;
+      f.measure_us_p50 = 41.0;
+    }
+    s.fingertips.push_back(f);
+  }
+  s.events = {{1'763'700'000'000'000'000, "PHASE", "TWIST_TURN"},
+              {1'763'700'000'050'000'000, "RECOMPRESS", "left e3 1.2"},
+              {1'763'700'000'100'000'000, "TWIST_CYCLE", "cycle 2"}};
+  return s;
+}
+
+void check_golden(const std::string& name, const std::string& text) {
+  const std::filesystem::path file = std::filesystem::path(TACTILE_GOLDEN_DIR) / (name + ".txt");
+  if (std::getenv("TACTILE_UPDATE_GOLDEN") != nullptr) util::write_file_atomic(file, text);
+  ASSERT_TRUE(std::filesystem::exists(file)) << file;
+  EXPECT_EQ(text, util::read_file(file)) << "golden " << file << "; the new text:\n" << text;
+}
+
+void check_fits(const std::string& text, int width, int height) {
+  std::istringstream in(text);
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    EXPECT_LE(static_cast<int>(line.size()), width) << line;
+  }
+  EXPECT_LE(n, height);
+}
+
+TEST(LiveRender, LargeWindowShowsBothDomesSideBySide) {
+  RenderOptions o;
+  o.width = 100;
+  o.height = 40;
+  const std::string text = render(fixed_state(), {}, o);
+  check_fits(text, o.width, o.height);
+  check_golden("live_100x40", text);
+}
+
+TEST(LiveRender, NarrowWindowStacksTheDomes) {
+  RenderOptions o;
+  o.width = 50;
+  o.height = 40;
+  const std::string text = render(fixed_state(), {}, o);
+  check_fits(text, o.width, o.height);
+  check_golden("live_50x40", text);
+}
+
+TEST(LiveRender, TinyWindowKeepsTheSummaries) {
+  RenderOptions o;
+  o.width = 40;
+  o.height = 12;
+  const std::string text = render(fixed_state(), {}, o);
+  check_fits(text, o.width, o.height);
+  check_golden("live_40x12", text);
+}
+
+TEST(LiveRender, ColourMarksSlipAndOverWithEscapeCodesOnly) {
+  RenderOptions o;
+  o.width = 100;
+  o.height = 40;
+  o.color = true;
+  const std::string colored = render(fixed_state(), {}, o);
+  EXPECT_NE(colored.find("\x1b[41;97m"), std::string::npos);  // slip: white on red
+  EXPECT_NE(colored.find("\x1b[1;31m#"), std::string::npos);  // over F2
+  // Without its escape codes it is the plain picture but for the legend and the slip glyphs.
+  std::string stripped;
+  for (std::size_t i = 0; i < colored.size(); ++i) {
+    if (colored[i] == '\x1b') {
+      while (colored[i] != 'm')
+        ++i;
+      continue;
+    }
+    stripped += colored[i];
+  }
+  check_fits(stripped, o.width + 1, o.height);  // padded blocks keep their trailing blanks
+}
+
+TEST(LiveRender, DomeLayoutIsTheRingsOrTheCalibration) {
+  const auto rings = dome_layout(41, nullptr);
+  ASSERT_EQ(rings.size(), 41U);
+  EXPECT_DOUBLE_EQ(rings[0][0], 0.0);
+  EXPECT_DOUBLE_EQ(rings[1][0], 1.0);   // ring 1: 8 elements at radius 1
+  EXPECT_DOUBLE_EQ(rings[9][0], 2.0);   // ring 2: 16 at radius 2
+  EXPECT_DOUBLE_EQ(rings[25][0], 3.0);  // ring 3: 16 at radius 3
+  Calibration cal;
+  cal.elements.resize(2);
+  cal.elements[1].center_px = {10, 20};
+  const auto c = dome_layout(2, &cal);
+  EXPECT_DOUBLE_EQ(c[1][0], 10.0);
+  EXPECT_DOUBLE_EQ(c[1][1], 20.0);
+}
+
+std::span<const std::uint8_t> bytes(const std::string& s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
+
+TEST(LiveModel, FramesEventsAndStatsBecomeTheState) {
+  LiveModel m({});
+  v1::Envelope env;
+  std::string buf;
+  std::int64_t now = 1'000'000'000;
+  for (const std::uint64_t seq : {0, 1, 2, 5}) {  // 3 and 4 are lost
+    auto* f = env.mutable_tactile_frame();
+    f->Clear();
+    f->set_sensor_id("left");
+    f->set_sequence(seq);
+    f->set_status(v1::FRAME_STATUS_COMPLETE);
+    for (std::uint32_t e = 0; e < 41; ++e) {
+      auto* r = f->add_elements();
+      r->set_id(e);
+      if (e == 7) {
+        r->set_contact(true);
+        r->set_fz_n(3.0);  // over F2
+        r->set_has_displacement(seq > 0);
+        r->set_dy_mm(0.01);  // slip
+      }
+    }
+    wire::encode(env, buf);
+    EXPECT_EQ(m.add("frame/left", bytes(buf), now), -1);
+    now += 10'000'000;
+  }
+  auto* ev = env.mutable_event();
+  ev->set_time_ns(5);
+  ev->set_kind(v1::EVENT_KIND_TWIST_CYCLE);
+  ev->set_phase("TWIST_TURN");
+  ev->set_cycle(3);
+  wire::encode(env, buf);
+  EXPECT_EQ(m.add("event", bytes(buf), now), 0);
+  auto* st = env.mutable_sensor_stats();
+  st->set_sensor_id("left");
+  st->set_frames(77);
+  wire::encode(env, buf);
+  m.add("stats/left", bytes(buf), now);
+  EXPECT_EQ(m.add("frame/left", bytes("garbage"), now), -1);
+  m.tick(now + 2'000'000'000, 42);
+  const LiveState& s = m.state();
+  ASSERT_EQ(s.fingertips.size(), 1U);
+  const FingertipView& f = s.fingertips[0];
+  EXPECT_EQ(f.sequence, 5U);
+  EXPECT_EQ(f.lost, 2U);
+  EXPECT_TRUE(f.over);
+  EXPECT_TRUE(f.slip);
+  EXPECT_TRUE(f.elements[7].slip);
+  EXPECT_FALSE(f.elements[6].contact);
+  EXPECT_TRUE(f.has_stats);
+  EXPECT_EQ(f.camera_frames, 77U);
+  EXPECT_EQ(s.phase, "TWIST_TURN");
+  EXPECT_EQ(s.cycle, 3U);
+  ASSERT_EQ(s.events.size(), 1U);
+  EXPECT_EQ(s.events[0].kind, "TWIST_CYCLE");
+  EXPECT_EQ(s.messages, 7U);
+  EXPECT_EQ(s.undecodable, 1U);
+  EXPECT_NE(summary_lines(s).find("left seq=5 "), std::string::npos) << summary_lines(s);
+  EXPECT_NE(summary_lines(s).find("flags=TOUCH,SLIP,OVER phase=TWIST_TURN"), std::string::npos)
+      << summary_lines(s);
+}
+
+}  // namespace
+}  // namespace tactile::live

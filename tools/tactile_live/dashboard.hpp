@@ -1,0 +1,131 @@
+#pragma once
+
+// tactile_live's model and its rendering. LiveModel takes the messages (frames, stats, events)
+// and keeps the latest state; render() draws that state as text: a pure function of the state
+// and the screen size, so it is tested on fixed states (golden text).
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "tactile/calibration.hpp"
+#include "tactile/control/config.hpp"
+#include "tactile/control/flag_analyzer.hpp"
+#include "tactile/reading.hpp"
+#include "tactile/v1/tactile.pb.h"
+
+namespace tactile::live {
+
+struct ElementCell {
+  std::uint32_t id = 0;
+  bool contact = false;
+  bool slip = false;  // in contact and moving more than dr this frame
+  double fz_n = 0;
+};
+
+struct FingertipView {
+  std::string id;
+  std::vector<ElementCell> elements;
+  std::uint64_t sequence = 0;
+  std::string status = "-";  // FrameStatus of the latest frame, without its prefix
+  double fps = 0;            // whole frames per second over the last second
+  std::uint64_t lost = 0;    // gaps in the TactileFrame sequence
+  bool touch = false, slip = false, over = false;
+  double max_fz_n = 0;
+  double max_slip_mm = 0;
+  double age_s = 0;  // since the latest frame
+  // From the latest SensorStats.
+  bool has_stats = false;
+  std::uint64_t camera_frames = 0;
+  std::uint64_t incomplete = 0;
+  double measure_us_p50 = 0;
+};
+
+struct EventLine {
+  std::int64_t time_ns = 0;  // the event's time (CLOCK_REALTIME of hand_node)
+  std::string kind;          // without the EVENT_KIND_ prefix
+  std::string detail;
+};
+
+struct TopicRate {
+  std::string topic;
+  double per_s = 0;
+};
+
+struct LiveState {
+  std::int64_t now_ns = 0;  // CLOCK_REALTIME: the clock shown
+  std::vector<std::string> endpoints;
+  std::vector<FingertipView> fingertips;
+  std::string phase = "-";
+  std::uint32_t cycle = 0;
+  std::deque<EventLine> events;  // newest last
+  std::vector<TopicRate> rates;
+  std::uint64_t messages = 0;
+  std::uint64_t undecodable = 0;
+};
+
+// Where each element sits on the dome, in any unit with y down (image rows): the calibration's
+// disk centres, or for a sensor without one rings of 1, 8, 16, 16, ... elements in id order (the
+// paper's 41-element layout).
+std::vector<std::array<double, 2>> dome_layout(std::size_t count, const Calibration* cal);
+
+struct RenderOptions {
+  int width = 80;
+  int height = 24;
+  bool color = false;
+  double f2_n = 2.5;  // force digits are F_z / F2 in ninths
+};
+
+// The whole screen as lines separated by '\n' (no cursor movement); at most `height` lines of at
+// most `width` visible characters.
+std::string render(const LiveState& state, std::span<const Calibration> calibrations,
+                   const RenderOptions& options);
+
+// Line mode: one line per fingertip (for a pipe or a log file).
+std::string summary_lines(const LiveState& state);
+std::string event_line(const EventLine& e);
+
+struct ModelOptions {
+  control::Config control;  // F1, F2, dr for the flags
+  std::size_t max_events = 8;
+};
+
+class LiveModel {
+ public:
+  explicit LiveModel(ModelOptions options, std::vector<std::string> endpoints = {});
+
+  // One message; `now_mono_ns` is the monotonic time it arrived. Returns the event's line index
+  // when the message was an Event (for line mode), -1 otherwise.
+  int add(std::string_view topic, std::span<const std::uint8_t> payload, std::int64_t now_mono_ns);
+  // Brings rates and ages to `now_mono_ns` and the clock to `now_real_ns`.
+  void tick(std::int64_t now_mono_ns, std::int64_t now_real_ns);
+  const LiveState& state() const { return state_; }
+
+ private:
+  FingertipView& fingertip(const std::string& id, std::size_t& index);
+  void count(std::string_view topic, std::int64_t now);
+
+  ModelOptions options_;
+  control::FlagAnalyzer flags_;
+  LiveState state_;
+  v1::Envelope envelope_;
+  std::vector<ElementReading> readings_;
+  // Messages counted over windows of about a second; the rate is that of the last whole window.
+  struct Counter {
+    std::string topic;
+    std::uint64_t count = 0;
+    std::int64_t since_ns = 0;
+    double rate = 0;
+  };
+  std::vector<Counter> counters_;
+  std::vector<Counter> frame_counters_;  // per fingertip, whole frames
+  std::vector<std::int64_t> last_frame_ns_;
+  std::vector<std::optional<std::uint64_t>> last_sequence_;
+  bool twist_phase_ = false;
+};
+
+}  // namespace tactile::live

@@ -1,0 +1,165 @@
+// tactile_plot: figures from a tactile log as PNG files (docs/tools.md): the paper's Fig. 3
+// (shear vector field) and Fig. 10 (y centroid change against fingertip x), per-element force
+// maps, flag and event timelines, latency histograms.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "plot_data.hpp"
+#include "tactile/config/calibration_file.hpp"
+#include "tactile/recording/log_reader.hpp"
+#include "tactile/util/clock.hpp"
+#include "tactile/util/log.hpp"
+
+namespace {
+
+using tactile::recording::ReadStatus;
+
+struct Options {
+  std::string log;
+  std::string out = "plots";
+  std::vector<std::string> figures{"all"};
+  std::vector<double> at;
+  std::vector<std::string> sensors;
+  int element = -1;
+  std::vector<std::string> calibrations;
+  double f1 = tactile::control::Config{}.f1_n;
+  double f2 = tactile::control::Config{}.f2_n;
+  double dr = tactile::control::Config{}.dr_mm;
+  int width = 1000;
+  int height = 700;
+  std::string log_level = "info";
+};
+
+int run(const Options& opt) {
+  tactile::util::set_log_level(tactile::util::parse_log_level(opt.log_level));
+  const std::set<std::string> known{"all", "shear", "fig10", "forces", "timeline", "latency"};
+  std::set<std::string> figures;
+  for (const auto& f : opt.figures) {
+    if (known.count(f) == 0) {
+      throw std::invalid_argument(
+          "--figure must be shear, fig10, forces, timeline, latency or all, is '" + f + "'");
+    }
+    if (f == "all") {
+      figures.insert(known.begin(), known.end());
+    } else {
+      figures.insert(f);
+    }
+  }
+  if (opt.width < 320 || opt.height < 240)
+    throw std::invalid_argument("--width/--height: at least 320x240");
+  for (const double t : opt.at) {
+    if (!(t >= 0)) throw std::invalid_argument("--at must be seconds from the log's start (>= 0)");
+  }
+  tactile::plots::PlotOptions po;
+  po.at_s = opt.at;
+  po.sensors = opt.sensors;
+  if (opt.element >= 0) po.element = static_cast<std::uint32_t>(opt.element);
+  po.control.f1_n = opt.f1;
+  po.control.f2_n = opt.f2;
+  po.control.dr_mm = opt.dr;
+  po.width = opt.width;
+  po.height = opt.height;
+  std::vector<std::string> warnings;
+  for (const auto& c : opt.calibrations)
+    po.calibrations.push_back(tactile::config::load_calibration(c, &warnings));
+  for (const auto& w : warnings)
+    tactile::util::log_warn("{}", w);
+
+  tactile::recording::LogReader reader(opt.log);
+  tactile::plots::PlotData data(po);
+  tactile::v1::LogRecord rec;
+  ReadStatus s;
+  std::uint64_t n = 0;
+  std::int64_t next_progress = tactile::util::monotonic_ns() + 2'000'000'000;
+  while ((s = reader.next(rec)) == ReadStatus::kRecord) {
+    data.add(rec);
+    if ((++n & 1023) == 0 && tactile::util::monotonic_ns() >= next_progress) {
+      next_progress = tactile::util::monotonic_ns() + 2'000'000'000;
+      tactile::util::log_info(
+          "read {:.0f} % of {} ({} records)",
+          100.0 * static_cast<double>(reader.position()) /
+              static_cast<double>(std::max<std::uint64_t>(reader.file_size(), 1)),
+          opt.log, n);
+    }
+  }
+  data.finish();
+  int code = 0;
+  if (s == ReadStatus::kTruncated) tactile::util::log_warn("{}", reader.problem());
+  if (s == ReadStatus::kCorrupt) {
+    std::fprintf(stderr, "tactile_plot: %s (plotting what came before)\n",
+                 reader.problem().c_str());
+    code = 1;
+  }
+  bool any_frame = false;
+  for (const auto& sd : data.sensors())
+    any_frame = any_frame || !sd.frames.empty();
+  if (!any_frame) {
+    throw std::runtime_error(opt.log + ": no TactileFrames (topic frame/<sensor_id>)" +
+                             (opt.sensors.empty() ? std::string() : " of the sensors asked for") +
+                             " to plot");
+  }
+  std::vector<std::filesystem::path> written;
+  auto add = [&](std::vector<std::filesystem::path> files) {
+    written.insert(written.end(), files.begin(), files.end());
+  };
+  if (figures.count("shear") != 0) add(tactile::plots::draw_shear_fields(data, opt.out));
+  if (figures.count("fig10") != 0) {
+    add(tactile::plots::draw_fig10(data, opt.out));
+    std::printf("Fig. 10 fingertip x: %s\n", data.position_source_text().c_str());
+  }
+  if (figures.count("forces") != 0) add(tactile::plots::draw_force_maps(data, opt.out));
+  if (figures.count("timeline") != 0) add(tactile::plots::draw_timeline(data, opt.out));
+  if (figures.count("latency") != 0) add(tactile::plots::draw_latency(data, opt.out));
+  for (const auto& p : written)
+    std::printf("wrote %s\n", p.string().c_str());
+  std::fflush(stdout);
+  return code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  tactile::util::set_program_name("tactile_plot");
+  Options opt;
+  CLI::App app{
+      "Draws figures from a tactile log (tactile_record) as PNG files: the paper's Fig. 3 shear "
+      "vector field (shear), Fig. 10 y centroid change against fingertip x (fig10), element "
+      "force maps (forces), forces/slip/flags/events over time (timeline) and latency "
+      "histograms (latency)."};
+  app.add_option("log", opt.log, "the log file")->required();
+  app.add_option("-o,--out", opt.out, "folder for the PNG files")->capture_default_str();
+  app.add_option("--figure", opt.figures,
+                 "shear, fig10, forces, timeline, latency or all (repeatable)")
+      ->capture_default_str();
+  app.add_option("--at", opt.at,
+                 "seconds from the log's start of a shear field / force map (repeatable; default: "
+                 "the frame with the largest total shear)");
+  app.add_option("--sensor", opt.sensors, "plot only this fingertip (repeatable)");
+  app.add_option("--element", opt.element,
+                 "Fig. 10: this element's dy instead of the element moving most");
+  app.add_option(
+      "--calibration", opt.calibrations,
+      "calibration files: element positions for the maps (default: mean centroids in the log)");
+  app.add_option("--f1", opt.f1, "F1 [N] for the TOUCH flag")->capture_default_str();
+  app.add_option("--f2", opt.f2, "F2 [N] for the OVER flag")->capture_default_str();
+  app.add_option("--dr", opt.dr, "dr [mm] for the SLIP flag")->capture_default_str();
+  app.add_option("--width", opt.width, "picture width in pixels")->capture_default_str();
+  app.add_option("--height", opt.height, "picture height in pixels")->capture_default_str();
+  app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "tactile_plot: %s (try --help)\n", e.what());
+    return 2;
+  }
+  try {
+    return run(opt);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tactile_plot: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,485 @@
+#include "plot_data.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "tactile/control/types.hpp"
+#include "tactile/plot/figure.hpp"
+#include "tactile/wire/envelope.hpp"
+
+namespace tactile::plots {
+namespace {
+
+bool twist_phase_named(const std::string& name) {
+  for (int p = 0; p <= static_cast<int>(control::Phase::kAborted); ++p) {
+    const auto phase = static_cast<control::Phase>(p);
+    if (name == control::to_string(phase)) return control::is_twist_phase(phase);
+  }
+  return false;
+}
+
+std::string event_name(v1::EventKind k) {
+  std::string n = v1::EventKind_Name(k);
+  const std::string prefix = "EVENT_KIND_";
+  return n.starts_with(prefix) ? n.substr(prefix.size()) : n;
+}
+
+std::string safe(const std::string& id) {
+  std::string s;
+  for (const char c : id)
+    s += std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '-' || c == '_' ? c : '_';
+  return s;
+}
+
+}  // namespace
+
+PlotData::PlotData(PlotOptions options) : options_(std::move(options)), flags_(options_.control) {
+  for (const auto& c : options_.calibrations) {
+    SensorData* s = sensor(c.sensor_id);
+    if (s == nullptr) continue;
+    for (const auto& e : c.elements)
+      s->positions[e.id] = {e.center_px.x * c.mm_per_px, e.center_px.y * c.mm_per_px};
+  }
+}
+
+SensorData* PlotData::sensor(const std::string& id) {
+  for (auto& s : sensors_) {
+    if (s.id == id) return &s;
+  }
+  if (!options_.sensors.empty() &&
+      std::find(options_.sensors.begin(), options_.sensors.end(), id) == options_.sensors.end()) {
+    return nullptr;
+  }
+  SensorData s;
+  s.id = id;
+  if (options_.at_s.empty()) {
+    s.snapshots.push_back(Snapshot{});
+  } else {
+    for (const double t : options_.at_s) {
+      Snapshot snap;
+      snap.target_s = t;
+      snap.score = -std::numeric_limits<double>::infinity();
+      s.snapshots.push_back(snap);
+    }
+  }
+  sensors_.push_back(std::move(s));
+  return &sensors_.back();
+}
+
+std::string PlotData::position_source_text() const {
+  switch (source_) {
+    case PositionSource::kArmState:
+      return "ArmState: wrist x + the fingertip's position rotated by the wrist yaw (world x)";
+    case PositionSource::kGroundTruth:
+      return "GroundTruth object_position_m.x: the cap held between the fingertips (world x)";
+    case PositionSource::kNone:
+      break;
+  }
+  return "none in the log (no ArmState or GroundTruth): plotted against time instead";
+}
+
+void PlotData::add(const v1::LogRecord& record) {
+  if (!first_ns_) first_ns_ = record.receive_time_ns();
+  if (record.kind() != v1::PAYLOAD_KIND_ENVELOPE) return;
+  const auto* p = reinterpret_cast<const std::uint8_t*>(record.payload().data());
+  if (wire::decode({p, record.payload().size()}, envelope_) != wire::DecodeStatus::kOk) return;
+  const double t = static_cast<double>(record.receive_time_ns() - *first_ns_) * 1e-9;
+  switch (envelope_.body_case()) {
+    case v1::Envelope::kTactileFrame:
+      on_frame(envelope_.tactile_frame(), t, record.receive_time_ns());
+      break;
+    case v1::Envelope::kEvent: {
+      const v1::Event& e = envelope_.event();
+      if (e.kind() == v1::EVENT_KIND_PHASE) twist_phase_ = twist_phase_named(e.phase());
+      events_.push_back({t, event_name(e.kind()), e.text()});
+      break;
+    }
+    case v1::Envelope::kGroundTruth:
+      if (source_ != PositionSource::kArmState) {
+        source_ = PositionSource::kGroundTruth;
+        truth_x_mm_ = envelope_.ground_truth().object_position_m().x() * 1000.0;
+      }
+      break;
+    case v1::Envelope::kArmState: {
+      source_ = PositionSource::kArmState;
+      const v1::ArmState& a = envelope_.arm_state();
+      const double c = std::cos(a.wrist().yaw_rad());
+      const double s = std::sin(a.wrist().yaw_rad());
+      for (const auto& f : a.fingertips()) {
+        arm_x_mm_[f.sensor_id()] =
+            (a.wrist().position_m().x() + c * f.position_m().x() - s * f.position_m().y()) * 1000.0;
+      }
+      break;
+    }
+    default:
+      break;
+  }
+}
+
+void PlotData::on_frame(const v1::TactileFrame& f, double t, std::int64_t receive_ns) {
+  SensorData* s = sensor(f.sensor_id());
+  if (s == nullptr) return;
+  FrameSample x;
+  x.t_s = t;
+  if (f.publish_timestamp_ns() > 0) {
+    const double cam =
+        static_cast<double>(f.publish_timestamp_ns() - f.camera_timestamp_ns()) * 1e-6;
+    // A camera with its own clock gives no meaningful difference: keep only plausible ones.
+    if (f.camera_timestamp_ns() > 0 && cam >= 0 && cam < 10'000) x.camera_to_publish_ms = cam;
+    if (f.receive_timestamp_ns() > 0) {
+      x.receive_to_publish_ms =
+          static_cast<double>(f.publish_timestamp_ns() - f.receive_timestamp_ns()) * 1e-6;
+    }
+    x.publish_to_record_ms = static_cast<double>(receive_ns - f.publish_timestamp_ns()) * 1e-6;
+  }
+  if (f.status() != v1::FRAME_STATUS_COMPLETE) {
+    ++s->incomplete;
+    s->frames.push_back(x);
+    return;
+  }
+  readings_.resize(static_cast<std::size_t>(f.elements_size()));
+  double dy_of_max = 0;
+  double best = -1;
+  for (int i = 0; i < f.elements_size(); ++i) {
+    const v1::ElementReading& e = f.elements(i);
+    ElementReading& r = readings_[static_cast<std::size_t>(i)];
+    r = {};
+    r.id = e.id();
+    r.contact = e.contact();
+    r.has_displacement = e.has_displacement();
+    r.G = e.g();
+    r.dx_mm = e.dx_mm();
+    r.dy_mm = e.dy_mm();
+    r.fz = e.fz_n();
+    if (e.contact()) {
+      s->centroid_sum[e.id()].first += e.x_mm();
+      s->centroid_sum[e.id()].second += e.y_mm();
+      ++s->centroid_count[e.id()];
+      x.max_fz_n = std::max(x.max_fz_n, e.fz_n());
+      const double d = std::hypot(e.dx_mm(), e.dy_mm());
+      if (e.has_displacement() && d > best) {
+        best = d;
+        dy_of_max = e.dy_mm();
+      }
+    }
+    if (options_.element && e.id() == *options_.element) dy_of_max = e.dy_mm();
+  }
+  control::FingertipInput in;
+  in.elements = readings_;
+  in.fresh = true;
+  const control::FingertipFlags fl = flags_.analyze(in, twist_phase_);
+  x.touch = fl.touch;
+  x.slip = fl.slip;
+  x.over = fl.over;
+  x.max_slip_mm = fl.max_slip_mm;
+  x.dy_mm = dy_of_max;
+  if (source_ == PositionSource::kArmState) {
+    const auto it = arm_x_mm_.find(f.sensor_id());
+    if (it != arm_x_mm_.end()) x.x_mm = it->second;
+  } else if (source_ == PositionSource::kGroundTruth) {
+    x.x_mm = truth_x_mm_;
+  }
+  s->frames.push_back(x);
+  snapshot(*s, f, t);
+}
+
+void PlotData::snapshot(SensorData& s, const v1::TactileFrame& f, double t) {
+  double shear = 0;
+  for (const auto& e : f.elements())
+    shear += std::hypot(e.ux_mm(), e.uy_mm());
+  for (Snapshot& snap : s.snapshots) {
+    const double score = std::isnan(snap.target_s) ? shear : -std::abs(t - snap.target_s);
+    if (score <= snap.score) continue;
+    snap.score = score;
+    snap.t_s = t;
+    snap.sequence = f.sequence();
+    snap.elements.clear();
+    for (const auto& e : f.elements()) {
+      snap.elements.push_back({e.id(), e.contact(), e.x_mm(), e.y_mm(), e.ux_mm(), e.uy_mm(),
+                               e.fx_n(), e.fy_n(), e.fz_n()});
+    }
+  }
+}
+
+void PlotData::finish() {
+  for (auto& s : sensors_) {
+    for (const auto& [id, sum] : s.centroid_sum) {
+      if (s.positions.count(id) != 0) continue;
+      const double n = s.centroid_count[id];
+      s.positions[id] = {sum.first / n, sum.second / n};
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Figures
+
+namespace {
+
+// Element spacing: the median distance to the nearest other element (for arrow scales).
+double spacing(const SensorData& s) {
+  std::vector<double> nearest;
+  for (const auto& [a, pa] : s.positions) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& [b, pb] : s.positions) {
+      if (a != b) best = std::min(best, std::hypot(pa.first - pb.first, pa.second - pb.second));
+    }
+    if (std::isfinite(best)) nearest.push_back(best);
+  }
+  if (nearest.empty()) return 1.0;
+  std::nth_element(nearest.begin(),
+                   nearest.begin() + static_cast<std::ptrdiff_t>(nearest.size() / 2),
+                   nearest.end());
+  return nearest[nearest.size() / 2];
+}
+
+std::string snapshot_title(const Snapshot& snap) {
+  if (std::isnan(snap.target_s)) return fmt::format("t = {:.3f} s (largest total shear)", snap.t_s);
+  return fmt::format("t = {:.3f} s (asked {:.3f} s)", snap.t_s, snap.target_s);
+}
+
+// Element positions drawn with -y up, so the picture looks like the camera image.
+void element_dots(plot::Panel& p, const SensorData& s, const Snapshot& snap) {
+  std::vector<double> ox, oy, cx, cy;
+  for (const auto& [id, pos] : s.positions) {
+    bool contact = false;
+    for (const auto& e : snap.elements) {
+      if (e.id == id) contact = e.contact;
+    }
+    (contact ? cx : ox).push_back(pos.first);
+    (contact ? cy : oy).push_back(-pos.second);
+  }
+  plot::Style grey;
+  grey.color = plot::kGray;
+  grey.marker_radius = 3;
+  p.scatter(ox, oy, "out of contact", grey);
+  plot::Style black;
+  black.color = plot::kBlack;
+  black.marker_radius = 3;
+  p.scatter(cx, cy, "in contact", black);
+}
+
+}  // namespace
+
+std::vector<std::filesystem::path> draw_shear_fields(const PlotData& d,
+                                                     const std::filesystem::path& dir) {
+  std::vector<std::filesystem::path> out;
+  for (const auto& s : d.sensors()) {
+    if (s.positions.empty()) continue;
+    plot::Figure fig(d.options().width,
+                     std::max(d.options().height / 2, 320) * static_cast<int>(s.snapshots.size()));
+    fig.title(fmt::format("Shear displacement field, fingertip {} (Fig. 3)", s.id));
+    double umax = 0;
+    for (const auto& snap : s.snapshots) {
+      for (const auto& e : snap.elements)
+        umax = std::max(umax, std::hypot(e.ux_mm, e.uy_mm));
+    }
+    const double scale = umax > 0 ? 0.8 * spacing(s) / umax : 1.0;
+    for (const auto& snap : s.snapshots) {
+      auto& p = fig.add_panel();
+      p.title(fmt::format("{}; arrows: u (mm) x {:.3g}", snapshot_title(snap), scale))
+          .x_label("x [mm]")
+          .y_label("-y [mm] (up in the image)")
+          .equal_aspect();
+      element_dots(p, s, snap);
+      std::vector<double> x, y, u, v;
+      for (const auto& e : snap.elements) {
+        if (!e.contact) continue;
+        const auto it = s.positions.find(e.id);
+        if (it == s.positions.end()) continue;
+        x.push_back(it->second.first);
+        y.push_back(-it->second.second);
+        u.push_back(e.ux_mm);
+        v.push_back(-e.uy_mm);
+      }
+      plot::Style st;
+      st.arrow_scale = scale;
+      st.color = plot::palette(3);
+      p.arrows(x, y, u, v, "shear displacement u", st);
+    }
+    out.push_back(dir / ("shear_" + safe(s.id) + ".png"));
+    fig.save_png(out.back());
+  }
+  return out;
+}
+
+std::vector<std::filesystem::path> draw_force_maps(const PlotData& d,
+                                                   const std::filesystem::path& dir) {
+  std::vector<std::filesystem::path> out;
+  // Normal force in five bands, light to dark; shear force as arrows.
+  const plot::Color band_colors[] = {
+      {198, 219, 239}, {107, 174, 214}, {33, 113, 181}, {239, 101, 72}, {165, 15, 21}};
+  for (const auto& s : d.sensors()) {
+    if (s.positions.empty()) continue;
+    plot::Figure fig(d.options().width,
+                     std::max(d.options().height / 2, 320) * static_cast<int>(s.snapshots.size()));
+    fig.title(fmt::format("Element forces, fingertip {}", s.id));
+    double fmax = 0;
+    double smax = 0;
+    for (const auto& snap : s.snapshots) {
+      for (const auto& e : snap.elements) {
+        fmax = std::max(fmax, e.fz_n);
+        smax = std::max(smax, std::hypot(e.fx_n, e.fy_n));
+      }
+    }
+    const double top = fmax > 0 ? fmax : 1.0;
+    const double scale = smax > 0 ? 0.8 * spacing(s) / smax : 1.0;
+    for (const auto& snap : s.snapshots) {
+      auto& p = fig.add_panel();
+      p.title(fmt::format("{}; arrows: (F_x, F_y) N x {:.3g}", snapshot_title(snap), scale))
+          .x_label("x [mm]")
+          .y_label("-y [mm] (up in the image)")
+          .equal_aspect();
+      std::vector<double> bx[5], by[5];
+      std::vector<double> ax, ay, au, av;
+      for (const auto& e : snap.elements) {
+        const auto it = s.positions.find(e.id);
+        if (it == s.positions.end()) continue;
+        const int band = std::clamp(static_cast<int>(e.fz_n / top * 5.0), 0, 4);
+        bx[band].push_back(it->second.first);
+        by[band].push_back(-it->second.second);
+        if (e.contact) {
+          ax.push_back(it->second.first);
+          ay.push_back(-it->second.second);
+          au.push_back(e.fx_n);
+          av.push_back(-e.fy_n);
+        }
+      }
+      for (int b = 0; b < 5; ++b) {
+        plot::Style st;
+        st.color = band_colors[b];
+        st.marker_radius = 4 + 2 * b;
+        p.scatter(bx[b], by[b], fmt::format("F_z {:.2f}-{:.2f} N", top * b / 5, top * (b + 1) / 5),
+                  st);
+      }
+      plot::Style arrow;
+      arrow.arrow_scale = scale;
+      arrow.color = plot::kBlack;
+      p.arrows(ax, ay, au, av, "shear force", arrow);
+    }
+    out.push_back(dir / ("forces_" + safe(s.id) + ".png"));
+    fig.save_png(out.back());
+  }
+  return out;
+}
+
+std::vector<std::filesystem::path> draw_fig10(const PlotData& d, const std::filesystem::path& dir) {
+  if (d.sensors().empty()) return {};
+  const bool have_x = d.position_source() != PositionSource::kNone;
+  plot::Figure fig(d.options().width, d.options().height);
+  fig.title("y-directional centroid change against x-directional fingertip position (Fig. 10)");
+  const double dr = d.options().control.dr_mm;
+  for (const auto& s : d.sensors()) {
+    auto& p = fig.add_panel();
+    std::vector<double> x, y;
+    for (const auto& f : s.frames) {
+      const double xv = have_x ? f.x_mm : f.t_s;
+      if (std::isnan(xv)) continue;
+      x.push_back(xv);
+      y.push_back(f.dy_mm);
+    }
+    p.title(fmt::format("fingertip {}: dy of {}", s.id,
+                        d.options().element ? fmt::format("element {}", *d.options().element)
+                                            : std::string("the element moving most")))
+        .x_label(have_x ? fmt::format("fingertip x [mm] from {}",
+                                      d.position_source() == PositionSource::kArmState
+                                          ? "ArmState"
+                                          : "GroundTruth (the held cap)")
+                        : std::string("time [s] (no fingertip position in the log)"))
+        .y_label("dy_G [mm/frame]");
+    p.line(x, y, "dy");
+    plot::Style dash;
+    dash.dashed = true;
+    dash.color = plot::kGray;
+    p.hline(dr, "+dr", dash);
+    p.hline(-dr, "-dr", dash);
+  }
+  const auto path = dir / "fig10.png";
+  fig.save_png(path);
+  return {path};
+}
+
+std::vector<std::filesystem::path> draw_timeline(const PlotData& d,
+                                                 const std::filesystem::path& dir) {
+  if (d.sensors().empty()) return {};
+  plot::Figure fig(d.options().width, d.options().height);
+  fig.title("Forces, slip, flags and events").share_x();
+  auto& forces = fig.add_panel();
+  auto& slips = fig.add_panel();
+  auto& flags = fig.add_panel(0.8);
+  forces.y_label("max F_z [N]");
+  slips.y_label("max |d| [mm/frame]");
+  flags.y_label("flags").x_label("time [s] from the log's start");
+  const double f1 = d.options().control.f1_n;
+  const double f2 = d.options().control.f2_n;
+  double row = 0;
+  for (const auto& s : d.sensors()) {
+    std::vector<double> t, fz, sl, touch, slip, over;
+    for (const auto& f : s.frames) {
+      t.push_back(f.t_s);
+      fz.push_back(f.max_fz_n);
+      sl.push_back(f.max_slip_mm);
+      touch.push_back(row + 2.0 + (f.touch ? 0.7 : 0.0));
+      slip.push_back(row + 1.0 + (f.slip ? 0.7 : 0.0));
+      over.push_back(row + (f.over ? 0.7 : 0.0));
+    }
+    forces.line(t, fz, s.id);
+    slips.line(t, sl, s.id);
+    flags.step(t, touch, s.id + " TOUCH");
+    flags.step(t, slip, s.id + " SLIP");
+    flags.step(t, over, s.id + " OVER");
+    row += 3.5;
+  }
+  plot::Style dash;
+  dash.dashed = true;
+  dash.color = plot::kGray;
+  forces.hline(f1, "F1", dash).hline(f2, "F2", dash);
+  slips.hline(d.options().control.dr_mm, "dr", dash);
+  std::size_t marks = 0;
+  for (const auto& e : d.events()) {
+    if (e.kind == "RECOMPRESS" && marks > 10) continue;  // keep the picture readable
+    if (++marks > 40) break;
+    plot::Style st;
+    st.color = plot::kGray;
+    st.line_width = 1;
+    fig.mark(e.t_s, e.kind, st);
+  }
+  const auto path = dir / "timeline.png";
+  fig.save_png(path);
+  return {path};
+}
+
+std::vector<std::filesystem::path> draw_latency(const PlotData& d,
+                                                const std::filesystem::path& dir) {
+  if (d.sensors().empty()) return {};
+  plot::Figure fig(d.options().width, d.options().height);
+  fig.title("Latency histograms");
+  auto& cam = fig.add_panel();
+  auto& pub = fig.add_panel();
+  auto& net = fig.add_panel();
+  cam.title("camera timestamp -> publish (sensor_node)").x_label("ms").y_label("frames");
+  pub.title("frame received -> publish (sensor_node)").x_label("ms").y_label("frames");
+  net.title("publish -> received by the recorder").x_label("ms").y_label("frames");
+  bool any_camera = false;
+  for (const auto& s : d.sensors()) {
+    std::vector<double> a, b, c;
+    for (const auto& f : s.frames) {
+      if (!std::isnan(f.camera_to_publish_ms)) a.push_back(f.camera_to_publish_ms);
+      if (!std::isnan(f.receive_to_publish_ms)) b.push_back(f.receive_to_publish_ms);
+      if (!std::isnan(f.publish_to_record_ms)) c.push_back(f.publish_to_record_ms);
+    }
+    any_camera = any_camera || !a.empty();
+    cam.histogram(a, 40, s.id);
+    pub.histogram(b, 40, s.id);
+    net.histogram(c, 40, s.id);
+  }
+  if (!any_camera)
+    cam.title("camera timestamp -> publish: no camera timestamps on this host's clock");
+  const auto path = dir / "latency.png";
+  fig.save_png(path);
+  return {path};
+}
+
+}  // namespace tactile::plots

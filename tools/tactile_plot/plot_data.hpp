@@ -1,0 +1,120 @@
+#pragma once
+
+// What tactile_plot gathers from a log in one pass, and the figures it draws from it.
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tactile/calibration.hpp"
+#include "tactile/control/config.hpp"
+#include "tactile/control/flag_analyzer.hpp"
+#include "tactile/v1/log.pb.h"
+#include "tactile/v1/tactile.pb.h"
+
+namespace tactile::plots {
+
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct FrameSample {
+  double t_s = 0;  // from the log's first record
+  double max_fz_n = 0;
+  double max_slip_mm = 0;  // largest per-frame displacement among in-contact elements
+  double dy_mm = 0;        // signed dy of that element (or of --element)
+  bool touch = false, slip = false, over = false;
+  double x_mm = kNaN;  // fingertip x (Fig. 10), NaN when unknown
+  double camera_to_publish_ms = kNaN;
+  double receive_to_publish_ms = kNaN;
+  double publish_to_record_ms = kNaN;
+};
+
+// One element of one frame, for the maps.
+struct ElementSnapshot {
+  std::uint32_t id = 0;
+  bool contact = false;
+  double x_mm = 0, y_mm = 0, ux_mm = 0, uy_mm = 0, fx_n = 0, fy_n = 0, fz_n = 0;
+};
+
+struct Snapshot {
+  double target_s = kNaN;  // the time asked for (NaN: the frame of largest total shear)
+  double t_s = kNaN;       // the frame's time
+  std::uint64_t sequence = 0;
+  double score = -1;  // largest total shear, or minus the distance to target_s
+  std::vector<ElementSnapshot> elements;
+};
+
+struct SensorData {
+  std::string id;
+  std::vector<FrameSample> frames;
+  std::vector<Snapshot> snapshots;
+  // Element positions (mm): from the calibration, or the mean in-contact centroid in the log.
+  std::map<std::uint32_t, std::pair<double, double>> positions;
+  std::map<std::uint32_t, std::pair<double, double>> centroid_sum;
+  std::map<std::uint32_t, int> centroid_count;
+  std::uint64_t incomplete = 0;
+};
+
+struct EventMark {
+  double t_s = 0;
+  std::string kind;
+  std::string text;
+};
+
+struct PlotOptions {
+  std::vector<double> at_s;              // snapshot times; empty: the frame of largest total shear
+  std::vector<std::string> sensors;      // empty: every sensor
+  std::optional<std::uint32_t> element;  // Fig. 10: this element's dy instead of the largest
+  control::Config control;               // F1, F2, dr for the flags
+  std::vector<Calibration> calibrations;
+  int width = 1000;
+  int height = 700;
+};
+
+// Where Fig. 10's fingertip x comes from.
+enum class PositionSource { kNone, kGroundTruth, kArmState };
+
+class PlotData {
+ public:
+  explicit PlotData(PlotOptions options);
+  void add(const v1::LogRecord& record);
+  void finish();
+
+  const std::vector<SensorData>& sensors() const { return sensors_; }
+  const std::vector<EventMark>& events() const { return events_; }
+  PositionSource position_source() const { return source_; }
+  std::string position_source_text() const;
+  const PlotOptions& options() const { return options_; }
+
+ private:
+  SensorData* sensor(const std::string& id);
+  void on_frame(const v1::TactileFrame& f, double t, std::int64_t receive_ns);
+  void snapshot(SensorData& s, const v1::TactileFrame& f, double t);
+
+  PlotOptions options_;
+  control::FlagAnalyzer flags_;
+  std::vector<SensorData> sensors_;
+  std::vector<EventMark> events_;
+  std::optional<std::int64_t> first_ns_;
+  PositionSource source_ = PositionSource::kNone;
+  double truth_x_mm_ = kNaN;
+  std::map<std::string, double> arm_x_mm_;  // per fingertip sensor id
+  bool twist_phase_ = false;
+  v1::Envelope envelope_;
+  std::vector<ElementReading> readings_;
+};
+
+// Each figure writes one or more PNG files into `dir` and returns their paths.
+std::vector<std::filesystem::path> draw_shear_fields(const PlotData& d,
+                                                     const std::filesystem::path& dir);
+std::vector<std::filesystem::path> draw_fig10(const PlotData& d, const std::filesystem::path& dir);
+std::vector<std::filesystem::path> draw_force_maps(const PlotData& d,
+                                                   const std::filesystem::path& dir);
+std::vector<std::filesystem::path> draw_timeline(const PlotData& d,
+                                                 const std::filesystem::path& dir);
+std::vector<std::filesystem::path> draw_latency(const PlotData& d,
+                                                const std::filesystem::path& dir);
+
+}  // namespace tactile::plots
