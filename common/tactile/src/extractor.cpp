@@ -443,39 +443,48 @@ bool Extractor::windowed_pass(const ElementLayout& el, const ImageView& f, doubl
   return true;
 }
 
-// Fills w[k] = exp(-(first + k - c)^2 / (2 s^2)) for k in [0, n), with w*u and w*u^2 beside it
-// where u = first + k - c. A recurrence outward from the pixel nearest c in each direction: every
-// factor is at most 1, so nothing overflows and far weights underflow to 0 gracefully, and the
-// rounding is the same on both sides (no bias). Seeds from float exp, products in double;
-// b = exp(-2a), a = 1 / (2 s^2), is shared by the two axes.
+// Fills w[k] = exp(-(first + k - c)^2 / (2 s^2)) for k in [0, n), and with kMoments w*u and
+// w*u^2 beside it where u = first + k - c. A recurrence outward from the pixel nearest c in
+// each direction: every factor is at most 1, so nothing overflows and far weights underflow to 0
+// gracefully, and the rounding is the same on both sides (no bias). Seeds from float exp,
+// products in double; b = exp(-2a), a = 1 / (2 s^2), is shared by the two axes.
+template <bool kMoments>
 static void gaussian_weights(int first, int n, double c, double a, double b, float* w, float* wu,
                              float* wu2) noexcept {
-  const int kc = std::clamp(static_cast<int>(std::lround(c)) - first, 0, n - 1);
+  const int kc = std::clamp(floor_int(c + 0.5) - first, 0, n - 1);
   const double uc = first + kc - c;
-  const auto put = [&](int k, double wk) {
-    const double u = first + k - c;
-    w[k] = static_cast<float>(wk);
-    if (wu != nullptr) {
-      wu[k] = static_cast<float>(wk * u);
-      wu2[k] = static_cast<float>(wk * u * u);
-    }
-  };
   const auto e = [](double v) { return static_cast<double>(std::exp(static_cast<float>(v))); };
   const double w0 = e(-a * uc * uc);
-  put(kc, w0);
+  w[kc] = static_cast<float>(w0);
+  if constexpr (kMoments) {
+    wu[kc] = static_cast<float>(w0 * uc);
+    wu2[kc] = static_cast<float>(w0 * uc * uc);
+  }
   double wk = w0;
   double step = e(-a * (2 * uc + 1));
+  double u = uc;
   for (int k = kc + 1; k < n; ++k) {
     wk *= step;
     step *= b;
-    put(k, wk);
+    u += 1;
+    w[k] = static_cast<float>(wk);
+    if constexpr (kMoments) {
+      wu[k] = static_cast<float>(wk * u);
+      wu2[k] = static_cast<float>(wk * u * u);
+    }
   }
   wk = w0;
   step = e(-a * (1 - 2 * uc));
+  u = uc;
   for (int k = kc - 1; k >= 0; --k) {
     wk *= step;
     step *= b;
-    put(k, wk);
+    u -= 1;
+    w[k] = static_cast<float>(wk);
+    if constexpr (kMoments) {
+      wu[k] = static_cast<float>(wk * u);
+      wu2[k] = static_cast<float>(wk * u * u);
+    }
   }
 }
 
@@ -493,19 +502,19 @@ bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x
   const int col_lo = std::max(b.x0, ceil_int(x - r));
   const int col_hi = std::min(b.x0 + b.width - 1, floor_int(x + r));
   if (row_hi < row_lo || col_hi < col_lo) return false;
-  // Column weights, 0 outside the window: the kernels read whole groups of up to 16 columns
-  // around it.
+  // Column weights, 0 outside the window: the kernels read groups of up to 16 columns that
+  // reach past it by less than 16 on either side.
   const int first = col_lo - b.x0;
   const int end = col_hi - b.x0 + 1;
-  for (int k = first / 16 * 16; k < first; ++k)
+  for (int k = std::max(0, first - 16); k < first; ++k)
     wx_[k] = wxu_[k] = wxu2_[k] = 0.0F;
-  for (int k = end; k < std::min(b.width, (end + 15) / 16 * 16); ++k)
+  for (int k = end; k < std::min(b.width, end + 16); ++k)
     wx_[k] = wxu_[k] = wxu2_[k] = 0.0F;
   const double a = 1.0 / (2.0 * s * s);
   const double ratio = std::exp(-2.0 * a);
-  gaussian_weights(col_lo, end - first, x, a, ratio, wx_.data() + first, wxu_.data() + first,
-                   wxu2_.data() + first);
-  gaussian_weights(row_lo, row_hi - row_lo + 1, y, a, ratio, wy_.data(), nullptr, nullptr);
+  gaussian_weights<true>(col_lo, end - first, x, a, ratio, wx_.data() + first, wxu_.data() + first,
+                         wxu2_.data() + first);
+  gaussian_weights<false>(row_lo, row_hi - row_lo + 1, y, a, ratio, wy_.data(), nullptr, nullptr);
 
   const detail::GaussWindow win{row_lo,     row_hi,      col_lo,       col_hi,    y,
                                 wx_.data(), wxu_.data(), wxu2_.data(), wy_.data()};

@@ -125,9 +125,12 @@ TACTILE_AVX2_INLINE Sums8 pass8(const Block& b, const FrameRef& f, const std::ui
     out.lx = sum_u64(lx64) + sum_u64(acc_lg);
     out.sy = sum_u64(acc_sy);
     out.ly = sum_u64(acc_ly);
-    alignas(32) std::uint8_t pk[32];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(pk), peak);
-    out.peak = *std::max_element(pk, pk + 32);
+    __m128i m = _mm_max_epu8(_mm256_castsi256_si128(peak), _mm256_extracti128_si256(peak, 1));
+    m = _mm_max_epu8(m, _mm_srli_si128(m, 8));
+    m = _mm_max_epu8(m, _mm_srli_si128(m, 4));
+    m = _mm_max_epu8(m, _mm_srli_si128(m, 2));
+    m = _mm_max_epu8(m, _mm_srli_si128(m, 1));
+    out.peak = _mm_cvtsi128_si32(m) & 0xFF;
   }
   out.above = above;
   return out;
@@ -188,14 +191,16 @@ TACTILE_AVX2_INLINE double hsum(__m256 v) noexcept {
 
 // One group of 8 pixels of a row: d = 256 p - ref (0 outside the disk) times the column
 // weights, into three partial sums.
-TACTILE_AVX2_INLINE void gauss_group(const std::uint8_t* p, const std::int32_t* rf,
+TACTILE_AVX2_INLINE void gauss_group(const std::uint8_t* p, const std::uint16_t* rf,
                                      const GaussWindow& w, int k, __m256i outside, __m256& s0,
                                      __m256& s1, __m256& s2) noexcept {
   const __m256i pv = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + k)));
-  __m256i dv = _mm256_sub_epi32(_mm256_slli_epi32(pv, 8),
-                                _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rf + k)));
-  // Pixels outside the disk carry a huge reference: their increment is far below -2^29.
-  dv = _mm256_and_si256(dv, _mm256_cmpgt_epi32(dv, outside));
+  const __m256i rv =
+      _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(rf + k)));
+  // The reference of an 8-bit sensor is at most 65280 in Q8; 65535 marks the pixels outside
+  // the disk, which weigh nothing.
+  const __m256i dv = _mm256_andnot_si256(_mm256_cmpeq_epi32(rv, outside),
+                                         _mm256_sub_epi32(_mm256_slli_epi32(pv, 8), rv));
   const __m256 df = _mm256_cvtepi32_ps(dv);
   s0 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wx + k), s0);
   s1 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wxu + k), s1);
@@ -205,9 +210,14 @@ TACTILE_AVX2_INLINE void gauss_group(const std::uint8_t* p, const std::int32_t* 
 TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockData& d,
                                 const GaussWindow& w) noexcept {
   if (b.width % 8 != 0) return portable_kernels().gauss_u8(b, f, d, w);
-  const int c_lo = std::max(0, w.col_lo - b.x0) / 8 * 8;
-  const int c_hi = std::min(b.width, w.col_hi - b.x0 + 1);
-  const __m256i outside = _mm256_set1_epi32(-(kOutsideDisk / 2));
+  // Groups of 8 from the window's first column (unaligned), moved left where the last group
+  // would leave the block; the weights are 0 up to 8 columns either side of the window.
+  const int first = std::max(0, w.col_lo - b.x0);
+  const int end = std::min(b.width, w.col_hi - b.x0 + 1);
+  const int groups = (end - first + 7) / 8;
+  const int c_lo = std::max(0, std::min(first, b.width - 8 * groups));
+  const int c_hi = std::min(b.width, c_lo + 8 * groups);
+  const __m256i outside = _mm256_set1_epi32(65535);
   __m256 t0 = _mm256_setzero_ps();
   __m256 t1x = _mm256_setzero_ps();
   __m256 t2x = _mm256_setzero_ps();
@@ -216,8 +226,8 @@ TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockDa
   for (int y = w.row_lo; y <= w.row_hi; ++y) {
     const int r = y - b.y0;
     const std::uint8_t* p = f.pixel<std::uint8_t>(b.x0, y);
-    const std::int32_t* rf =
-        d.ref + b.offset + static_cast<std::size_t>(r) * static_cast<std::size_t>(b.width);
+    const std::uint16_t* rf =
+        d.ref16 + b.offset + static_cast<std::size_t>(r) * static_cast<std::size_t>(b.width);
     // Two sets of partial sums, for even and odd groups: shorter dependency chains.
     __m256 a0 = _mm256_setzero_ps();
     __m256 a1 = _mm256_setzero_ps();
