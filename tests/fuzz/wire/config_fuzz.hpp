@@ -1,9 +1,9 @@
 #pragma once
 
-// The YAML configuration loaders take a path: each input is written to a file in a private
-// folder that also holds valid calibration files for the names the seeds use (left.yaml,
-// right.yaml). The documented promise: a file that cannot be used throws config::ConfigError
-// with a one-line message; anything else escaping is a finding.
+// The YAML configuration loaders take a path: each input is written to a file in a folder that
+// also holds valid calibration files for the names the seeds use (left.yaml, right.yaml). The
+// documented promise: a file that cannot be used throws config::ConfigError with a one-line
+// message; anything else escaping is a finding.
 #include <unistd.h>
 
 #include <cstdint>
@@ -20,37 +20,42 @@
 
 namespace tactile::fuzz {
 
+// One folder, config-inputs/ in the working directory (the build tree under ctest and
+// run-wire-fuzz), for every run of the configuration targets, so a run that aborts on a finding
+// leaves at most its own input file behind; it holds valid calibration files for the names the
+// seeds use, and each process writes its inputs to a file of its own there.
 class ConfigFolder {
  public:
-  ConfigFolder() {
-    std::string templ = (std::filesystem::temp_directory_path() / "tactile-fuzz-XXXXXX").string();
-    if (::mkdtemp(templ.data()) == nullptr) {
-      std::perror("mkdtemp");
-      std::abort();
+  ConfigFolder() : dir_(std::filesystem::current_path() / "config-inputs") {
+    std::filesystem::create_directories(dir_);
+    const std::string me = std::to_string(::getpid());
+    for (const char* id : {"left", "right"}) {
+      // Written aside and renamed, so another process never reads half a file.
+      const auto aside = dir_ / (std::string(id) + "." + me + ".tmp");
+      config::save_calibration(aside, wire_calibration(id));
+      std::filesystem::rename(aside, dir_ / (std::string(id) + ".yaml"));
     }
-    dir_ = templ;
-    config::save_calibration(dir_ / "left.yaml", wire_calibration("left"));
-    config::save_calibration(dir_ / "right.yaml", wire_calibration("right"));
+    input_ = dir_ / ("input-" + me + ".yaml");
   }
   ~ConfigFolder() {
     std::error_code ec;
-    std::filesystem::remove_all(dir_, ec);
+    std::filesystem::remove(input_, ec);
   }
   ConfigFolder(const ConfigFolder&) = delete;
   ConfigFolder& operator=(const ConfigFolder&) = delete;
 
-  // Writes the input as `name` in the folder and returns its path.
-  std::filesystem::path write(const char* name, const std::uint8_t* data, std::size_t size) const {
-    const auto path = dir_ / name;
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  // Writes the input to this process's file in the folder and returns its path.
+  const std::filesystem::path& write(const std::uint8_t* data, std::size_t size) const {
+    std::ofstream out(input_, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
     out.close();
     require(static_cast<bool>(out), "cannot write the input file");
-    return path;
+    return input_;
   }
 
  private:
   std::filesystem::path dir_;
+  std::filesystem::path input_;
 };
 
 // Runs `load` and enforces the error promise.

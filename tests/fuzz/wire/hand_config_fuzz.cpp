@@ -13,7 +13,7 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace tactile;
   static const fuzz::ConfigFolder folder;
-  const auto path = folder.write("hand.yaml", data, size);
+  const auto path = folder.write(data, size);
   fuzz::expect_loaded_or_config_error([&] {
     std::vector<std::string> warnings;
     const hand::HandConfig cfg = hand::load_hand_config(path, &warnings);

@@ -12,7 +12,7 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace tactile;
   static const fuzz::ConfigFolder folder;
-  const auto path = folder.write("sensor.yaml", data, size);
+  const auto path = folder.write(data, size);
   fuzz::expect_loaded_or_config_error([&] {
     std::vector<std::string> warnings;
     const sensor::SensorConfig cfg = sensor::load_sensor_config(path, &warnings);
