@@ -121,8 +121,9 @@ int run(const Options& opt) {
     for (std::size_t e = 0; e < cal.elements.size(); ++e) {
       if ((e + static_cast<std::size_t>(k)) % 4 == 0) continue;
       testing::Spot s;
-      s.center = {cal.elements[e].center_px.x + 0.07 * k + 0.3 * std::sin(0.4 * k + static_cast<double>(e)),
-                  cal.elements[e].center_px.y - 0.05 * k};
+      s.center = {
+          cal.elements[e].center_px.x + 0.07 * k + 0.3 * std::sin(0.4 * k + static_cast<double>(e)),
+          cal.elements[e].center_px.y - 0.05 * k};
       s.peak = 40 + 3.0 * k + 5.0 * static_cast<double>(e % 5);
       s.sigma = 2.2;
       spots.push_back(s);

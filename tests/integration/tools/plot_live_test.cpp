@@ -1,0 +1,322 @@
+// tactile_plot on a log it reads from a real file, and tactile_live against real publishers, in
+// line mode (a pipe) and in screen mode (a pseudo-terminal).
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/ioctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+
+#include "tactile/recording/log_writer.hpp"
+#include "tactile/util/clock.hpp"
+#include "tactile/util/files.hpp"
+#include "tactile/wire/envelope.hpp"
+#include "tactile/wire/sockets.hpp"
+#include "tools_support.hpp"
+
+namespace tactile {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::Process;
+using testing::TempDir;
+using tools_test::await_match;
+
+std::span<const std::uint8_t> bytes(const std::string& s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
+
+// A TactileFrame of 41 elements: elements 0..10 in contact, shear growing with k, element 4
+// slipping down on every 10th frame.
+void fill_frame(v1::TactileFrame& f, const std::string& id, std::uint64_t k, std::int64_t now) {
+  f.Clear();
+  f.set_sensor_id(id);
+  f.set_sequence(k);
+  f.set_status(v1::FRAME_STATUS_COMPLETE);
+  f.set_camera_timestamp_ns(now - 2'000'000);
+  f.set_receive_timestamp_ns(now - 1'500'000);
+  f.set_publish_timestamp_ns(now - 1'000'000);
+  for (std::uint32_t e = 0; e < 41; ++e) {
+    auto* r = f.add_elements();
+    r->set_id(e);
+    r->set_g(100);
+    if (e > 10) continue;
+    const double a = 2 * 3.14159 * e / 11;
+    r->set_contact(true);
+    r->set_g(3000 + 100.0 * e);
+    r->set_x_mm(5 + 2 * std::cos(a));
+    r->set_y_mm(5 + 2 * std::sin(a));
+    r->set_ux_mm(0.0005 * static_cast<double>(k) * std::cos(a));
+    r->set_uy_mm(0.0003 * static_cast<double>(k));
+    r->set_fx_n(0.01 * static_cast<double>(k));
+    r->set_fz_n(0.05 * static_cast<double>(k % 60) + 0.02 * e);
+    r->set_has_displacement(k > 0);
+    if (e == 4 && k % 10 == 0) r->set_dy_mm(k < 50 ? 0.008 : -0.008);
+  }
+}
+
+void write_test_log(const std::filesystem::path& path, bool with_truth, bool with_frames = true) {
+  recording::LogWriter w(path, v1::LogHeader{}, {});
+  v1::Envelope env;
+  std::string buf;
+  const std::int64_t t0 = 1'763'700'000'000'000'000;
+  for (std::uint64_t k = 0; k < 100; ++k) {
+    const std::int64_t t = t0 + static_cast<std::int64_t>(k) * 10'000'000;
+    if (with_truth && k % 2 == 0) {
+      auto* g = env.mutable_ground_truth();
+      g->Clear();
+      g->mutable_object_position_m()->set_x(0.300 + 0.0005 * static_cast<double>(k));
+      wire::encode(env, buf);
+      ASSERT_EQ(w.append(t, "truth", "tcp://rig", v1::PAYLOAD_KIND_ENVELOPE, bytes(buf)),
+                recording::WriteStatus::kOk);
+    }
+    for (const char* id : {"left", "right"}) {
+      if (!with_frames) break;
+      fill_frame(*env.mutable_tactile_frame(), id, k, t);
+      wire::encode(env, buf);
+      ASSERT_EQ(w.append(t + 500'000, std::string("frame/") + id, "tcp://sensor",
+                         v1::PAYLOAD_KIND_ENVELOPE, bytes(buf)),
+                recording::WriteStatus::kOk);
+    }
+    if (k % 25 == 3) {
+      auto* e = env.mutable_event();
+      e->Clear();
+      e->set_time_ns(t);
+      e->set_kind(k == 3 ? v1::EVENT_KIND_GRASPING_ENDED : v1::EVENT_KIND_RECOMPRESS);
+      wire::encode(env, buf);
+      ASSERT_EQ(w.append(t, "event", "tcp://hand", v1::PAYLOAD_KIND_ENVELOPE, bytes(buf)),
+                recording::WriteStatus::kOk);
+    }
+  }
+}
+
+bool is_png(const std::filesystem::path& p) {
+  std::error_code ec;
+  if (!std::filesystem::exists(p, ec)) return false;
+  const std::string b = util::read_file(p);
+  return b.size() > 1000 && b.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0;
+}
+
+TEST(Plot, DrawsEveryFigureFromALog) {
+  TempDir dir;
+  write_test_log(dir / "run.tlog", true);
+  const auto r = testing::run({TACTILE_PLOT_PATH, (dir / "run.tlog").string(), "-o",
+                               (dir / "out").string(), "--at", "0.2", "--at", "0.9"},
+                              60s);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("Fig. 10 fingertip x: GroundTruth object_position_m.x"), std::string::npos)
+      << r.out;
+  for (const char* name : {"shear_left.png", "shear_right.png", "fig10.png", "forces_left.png",
+                           "forces_right.png", "timeline.png", "latency.png"}) {
+    EXPECT_TRUE(is_png(dir / "out" / name)) << name;
+    EXPECT_NE(r.out.find(std::string("wrote ") + (dir / "out" / name).string()), std::string::npos)
+        << r.out;
+  }
+}
+
+TEST(Plot, WithoutPositionsFig10IsAgainstTimeAndSaysSo) {
+  TempDir dir;
+  write_test_log(dir / "run.tlog", false);
+  const auto r = testing::run({TACTILE_PLOT_PATH, (dir / "run.tlog").string(), "-o",
+                               (dir / "out").string(), "--figure", "fig10", "--sensor", "right"},
+                              60s);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("Fig. 10 fingertip x: none in the log"), std::string::npos) << r.out;
+  EXPECT_TRUE(is_png(dir / "out" / "fig10.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "timeline.png"));
+}
+
+TEST(Plot, BadInputGivesOneClearLine) {
+  TempDir dir;
+  write_test_log(dir / "empty.tlog", true, false);
+  auto r =
+      testing::run({TACTILE_PLOT_PATH, (dir / "empty.tlog").string(), "-o", (dir / "o").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("empty.tlog: no TactileFrames"), std::string::npos) << r.err;
+  r = testing::run({TACTILE_PLOT_PATH, (dir / "missing.tlog").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("missing.tlog: cannot open"), std::string::npos) << r.err;
+  r = testing::run({TACTILE_PLOT_PATH, (dir / "empty.tlog").string(), "--figure", "pie"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--figure must be"), std::string::npos) << r.err;
+  r = testing::run({TACTILE_PLOT_PATH});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  for (const char* tool : {TACTILE_PLOT_PATH, TACTILE_LIVE_PATH}) {
+    r = testing::run({tool, "--help"});
+    EXPECT_EQ(r.exit_code, 0);
+    EXPECT_NE(r.out.find("Usage"), std::string::npos);
+  }
+  r = testing::run({TACTILE_LIVE_PATH});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("tactile_live: give at least one endpoint"), std::string::npos);
+}
+
+// Publishes frames of two fingertips on one endpoint and events on another until `done`.
+template <typename Done>
+void publish_until(wire::Publisher& frames, wire::Publisher& events, Done done) {
+  v1::Envelope env;
+  std::string buf;
+  std::uint64_t k = 0;
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  while (!done() && std::chrono::steady_clock::now() < deadline) {
+    for (const char* id : {"left", "right"}) {
+      fill_frame(*env.mutable_tactile_frame(), id, k, util::realtime_ns());
+      wire::encode(env, buf);
+      frames.send(std::string("frame/") + id, bytes(buf));
+    }
+    if (k % 20 == 0) {
+      auto* e = env.mutable_event();
+      e->Clear();
+      e->set_time_ns(util::realtime_ns());
+      e->set_kind(v1::EVENT_KIND_RECOMPRESS);
+      e->set_phase("TRANSPORT");
+      e->set_sensor_id("left");
+      e->set_element_id(4);
+      e->set_text("re-compress");
+      wire::encode(env, buf);
+      events.send("event", bytes(buf));
+    }
+    ++k;
+    std::this_thread::sleep_for(5ms);
+  }
+}
+
+TEST(Live, LineModeFollowsRealPublishers) {
+  zmq::context_t ctx;
+  wire::Publisher frames(ctx, "tcp://127.0.0.1:*");
+  wire::Publisher events(ctx, "tcp://127.0.0.1:*");
+  Process live({TACTILE_LIVE_PATH, frames.endpoint(), events.endpoint(), "--interval", "0.1"});
+  publish_until(frames, events, [&] {
+    const std::string out = live.out_so_far();
+    return out.find("right seq=") != std::string::npos &&
+           out.find("RECOMPRESS left e4 re-compress") != std::string::npos &&
+           out.find("phase=TRANSPORT") != std::string::npos;
+  });
+  live.signal(SIGINT);
+  const auto r = live.wait(10s);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("right seq="), std::string::npos) << r.out;
+  EXPECT_TRUE(std::regex_search(r.out, std::regex("left seq=\\d+ fps=\\d+\\.\\d lost=0 "
+                                                  "status=COMPLETE contact=11/41 ")))
+      << r.out;
+  EXPECT_NE(r.out.find("event "), std::string::npos);
+  EXPECT_NE(r.out.find("RECOMPRESS left e4 re-compress"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("\x1b"), std::string::npos);  // no escape codes into a pipe
+}
+
+// Runs tactile_live on a pseudo-terminal (TERM=xterm) and collects what it draws.
+class PtyProcess {
+ public:
+  explicit PtyProcess(std::vector<std::string> argv) {
+    master_ = posix_openpt(O_RDWR | O_NOCTTY);
+    if (master_ < 0 || grantpt(master_) != 0 || unlockpt(master_) != 0)
+      throw std::runtime_error("pty");
+    const std::string slave = ptsname(master_);
+    winsize ws{};
+    ws.ws_col = 100;
+    ws.ws_row = 40;
+    ioctl(master_, TIOCSWINSZ, &ws);
+    pid_ = fork();
+    if (pid_ == 0) {
+      setsid();
+      const int s = open(slave.c_str(), O_RDWR);
+      dup2(s, 0);
+      dup2(s, 1);
+      const int devnull = open("/dev/null", O_WRONLY);
+      dup2(devnull, 2);
+      setenv("TERM", "xterm", 1);
+      std::vector<char*> args;
+      for (auto& a : argv)
+        args.push_back(a.data());
+      args.push_back(nullptr);
+      execv(args[0], args.data());
+      _exit(127);
+    }
+    fcntl(master_, F_SETFL, O_NONBLOCK);
+  }
+  // What it drew, without escape sequences.
+  std::string text() {
+    const std::string& raw = read();
+    std::string t;
+    for (std::size_t i = 0; i < raw.size(); ++i) {
+      if (raw[i] == '\x1b') {
+        while (i < raw.size() && std::isalpha(static_cast<unsigned char>(raw[i])) == 0)
+          ++i;
+        continue;
+      }
+      t += raw[i];
+    }
+    return t;
+  }
+  ~PtyProcess() {
+    if (pid_ > 0 && waitpid(pid_, nullptr, WNOHANG) == 0) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+    close(master_);
+  }
+  const std::string& read() {
+    char buf[4096];
+    for (;;) {
+      const ssize_t n = ::read(master_, buf, sizeof buf);
+      if (n <= 0) break;
+      out_.append(buf, static_cast<std::size_t>(n));
+    }
+    return out_;
+  }
+  int stop(int sig) {
+    kill(pid_, sig);
+    int st = 0;
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    while (waitpid(pid_, &st, WNOHANG) == 0) {
+      read();
+      if (std::chrono::steady_clock::now() > deadline) {
+        kill(pid_, SIGKILL);
+        waitpid(pid_, &st, 0);
+        return -1;
+      }
+      std::this_thread::sleep_for(5ms);
+    }
+    read();
+    pid_ = -1;
+    return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+  }
+
+ private:
+  int master_ = -1;
+  pid_t pid_ = -1;
+  std::string out_;
+};
+
+TEST(Live, ScreenModeOnATerminalDrawsTheDomeAndRestoresTheTerminal) {
+  zmq::context_t ctx;
+  wire::Publisher frames(ctx, "tcp://127.0.0.1:*");
+  wire::Publisher events(ctx, "tcp://127.0.0.1:*");
+  PtyProcess live({TACTILE_LIVE_PATH, frames.endpoint(), events.endpoint()});
+  publish_until(frames, events, [&] {
+    const std::string t = live.text();
+    return t.find("right seq") != std::string::npos && t.find("RECOMPRESS") != std::string::npos;
+  });
+  const int code = live.stop(SIGTERM);
+  EXPECT_EQ(code, 0);
+  const std::string& out = live.read();
+  EXPECT_EQ(out.rfind("\x1b[?1049h", 0), 0U);  // the alternate screen first
+  EXPECT_NE(out.find("\x1b[H"), std::string::npos);
+  EXPECT_NE(live.text().find("left seq"), std::string::npos);
+  EXPECT_NE(out.find("\x1b[32m"), std::string::npos);  // force digits in colour
+  const auto restore = out.rfind("\x1b[?25h\x1b[?1049l");
+  ASSERT_NE(restore, std::string::npos);
+  EXPECT_EQ(restore + std::string("\x1b[?25h\x1b[?1049l").size(), out.size());
+  // Redrawn at least 10 times a second: count the frames drawn while it ran.
+  std::size_t frames_drawn = 0;
+  for (auto at = out.find("\x1b[H"); at != std::string::npos; at = out.find("\x1b[H", at + 1))
+    ++frames_drawn;
+  EXPECT_GE(frames_drawn, 2U);
+}
+
+}  // namespace
+}  // namespace tactile
