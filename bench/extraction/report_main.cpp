@@ -380,20 +380,35 @@ int run(int argc, char** argv) {
        << pass(worst_ratio <= 1.2) << " (worst " << fixed(worst_ratio, 2)
        << "); bias at most 0.001 px: " << pass(worst_bias <= 0.001) << " (worst "
        << fixed(worst_bias, 4) << " px).\n";
-    double worst_shape = 0;
-    std::string where;
-    for (const Row& r : acc) {
-      if (r.at("method") != def || r.at("shape") == "gaussian" || num(r, "pnr") < 25) continue;
-      if (num(r, "rms_px") > worst_shape) {
-        worst_shape = num(r, "rms_px");
-        where = r.at("shape") + " sigma " + r.at("sigma_px") + " pnr " + r.at("pnr") +
-                (r.at("shot_noise") == "1" ? " shot" : "") + " (CRB " +
-                fixed(std::max(num(r, "crb_x_px"), num(r, "crb_y_px")), 4) + ")";
+    // Elliptical and flat-topped spots, each with read noise only (the target's condition) and
+    // with shot noise; the Cramer-Rao bound says what any estimator could do there. Where the
+    // target is missed at peak-to-noise 25, the same from 50.
+    for (const std::string shape : {"elliptical", "flat-top"}) {
+      for (const bool shot : {false, true}) {
+        for (const double min_pnr : {25.0, 50.0}) {
+          double worst = 0;
+          double worst_crb = 0;
+          std::string where;
+          for (const Row& r : acc) {
+            if (r.at("method") != def || r.at("shape") != shape || num(r, "pnr") < min_pnr ||
+                (num(r, "shot_noise") != 0) != shot)
+              continue;
+            if (num(r, "rms_px") > worst) {
+              worst = num(r, "rms_px");
+              worst_crb = std::max(num(r, "crb_x_px"), num(r, "crb_y_px"));
+              where = "sigma " + r.at("sigma_px") + " pnr " + r.at("pnr");
+            }
+          }
+          if (where.empty()) continue;
+          md << "- " << shape << " spots at pnr >= " << fmt(min_pnr)
+             << (shot ? ", with shot noise" : ", read noise")
+             << ": RMS at most 0.03 px: " << pass(worst <= 0.03) << " (worst " << fixed(worst, 4)
+             << " px at " << where << "; Cramer-Rao bound there " << fixed(worst_crb, 4) << " px"
+             << (worst_crb > 0.03 ? ", above the target: no estimator can meet it" : "") << ").\n";
+          if (worst <= 0.03) break;
+        }
       }
     }
-    md << "- Elliptical and flat-topped spots at pnr >= 25: RMS at most 0.03 px: "
-       << pass(worst_shape <= 0.03) << " (worst " << fixed(worst_shape, 4) << " px, " << where
-       << ").\n";
     const Timing t = timing(def, 41);
     md << "- 41 contacts, Mono8: median at most 20 us: " << pass(t.median_us <= 20) << " ("
        << fmt(t.median_us)
