@@ -80,7 +80,7 @@ std::vector<std::string> fingertip_block(const FingertipView& f, const Calibrati
   l.text(f.id, "1");
   l.text(fmt::format(" seq {} {:.0f} fps", f.sequence, f.fps));
   if (f.lost > 0) l.text(fmt::format(" lost {}", f.lost), "33");
-  if (f.status != "COMPLETE" && f.status != "-") l.text(" " + f.status, "33");
+  if (f.status != "COMPLETE" && f.status != "-") l.text(" " + std::string(f.status), "33");
   if (f.age_s > 1.0) l.text(fmt::format(" stale {:.0f}s", f.age_s), "33");
   lines.push_back(l.take());
   l.text(f.touch ? "TOUCH" : "-----", f.touch ? "32" : "2");
@@ -360,20 +360,24 @@ int LiveModel::add(std::string_view topic, std::span<const std::uint8_t> payload
                    std::int64_t now) {
   ++state_.messages;
   count(topic, now);
-  if (wire::decode(payload, envelope_) != wire::DecodeStatus::kOk) {
+  if (decoder_.decode(payload) != wire::DecodeStatus::kOk) {
     ++state_.undecodable;
     return -1;
   }
+  const v1::Envelope& envelope = decoder_.envelope();
   std::size_t k = 0;
-  switch (envelope_.body_case()) {
+  switch (envelope.body_case()) {
     case v1::Envelope::kTactileFrame: {
-      const v1::TactileFrame& fr = envelope_.tactile_frame();
+      const v1::TactileFrame& fr = envelope.tactile_frame();
       FingertipView& f = fingertip(fr.sensor_id(), k);
       if (last_sequence_[k] && fr.sequence() > *last_sequence_[k] + 1)
         f.lost += fr.sequence() - *last_sequence_[k] - 1;
       last_sequence_[k] = fr.sequence();
       f.sequence = fr.sequence();
-      f.status = strip(v1::FrameStatus_Name(fr.status()), "FRAME_STATUS_");
+      // The enum's name is static: a view of it costs no allocation per frame.
+      std::string_view status = v1::FrameStatus_Name(fr.status());
+      if (status.starts_with("FRAME_STATUS_")) status.remove_prefix(13);
+      f.status = status;
       last_frame_ns_[k] = now;
       if (fr.status() != v1::FRAME_STATUS_COMPLETE) break;
       ++frame_counters_[k].count;
@@ -410,7 +414,7 @@ int LiveModel::add(std::string_view topic, std::span<const std::uint8_t> payload
       break;
     }
     case v1::Envelope::kSensorStats: {
-      const v1::SensorStats& st = envelope_.sensor_stats();
+      const v1::SensorStats& st = envelope.sensor_stats();
       FingertipView& f = fingertip(st.sensor_id(), k);
       f.has_stats = true;
       f.camera_frames = st.frames();
@@ -419,7 +423,7 @@ int LiveModel::add(std::string_view topic, std::span<const std::uint8_t> payload
       break;
     }
     case v1::Envelope::kEvent: {
-      const v1::Event& e = envelope_.event();
+      const v1::Event& e = envelope.event();
       if (!e.phase().empty()) {
         state_.phase = e.phase();
         twist_phase_ = twist_phase_named(e.phase());

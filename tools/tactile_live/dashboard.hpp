@@ -16,6 +16,7 @@
 #include "tactile/control/config.hpp"
 #include "tactile/control/flag_analyzer.hpp"
 #include "tactile/reading.hpp"
+#include "tactile/recording/envelope_decoder.hpp"
 #include "tactile/v1/tactile.pb.h"
 
 namespace tactile::live {
@@ -31,9 +32,9 @@ struct FingertipView {
   std::string id;
   std::vector<ElementCell> elements;
   std::uint64_t sequence = 0;
-  std::string status = "-";  // FrameStatus of the latest frame, without its prefix
-  double fps = 0;            // whole frames per second over the last second
-  std::uint64_t lost = 0;    // gaps in the TactileFrame sequence
+  std::string_view status = "-";  // FrameStatus of the latest frame, without its prefix
+  double fps = 0;                 // whole frames per second over the last second
+  std::uint64_t lost = 0;         // gaps in the TactileFrame sequence
   bool touch = false, slip = false, over = false;
   double max_fz_n = 0;
   double max_slip_mm = 0;
@@ -112,7 +113,7 @@ class LiveModel {
   ModelOptions options_;
   control::FlagAnalyzer flags_;
   LiveState state_;
-  v1::Envelope envelope_;
+  recording::EnvelopeDecoder decoder_;
   std::vector<ElementReading> readings_;
   // Messages counted over windows of about a second; the rate is that of the last whole window.
   struct Counter {

@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "tactile/recording/envelope_decoder.hpp"
 #include "tactile/recording/log_writer.hpp"
 #include "tactile/recording/raw_frame.hpp"
 #include "tactile/recording/sources.hpp"
@@ -55,10 +56,9 @@ class TopicCounts {
     ++e->count;
     if (topic.starts_with("frame/")) {
       const auto* data = static_cast<const std::uint8_t*>(payload.data());
-      if (tactile::wire::decode({data, payload.size()}, envelope_) ==
-              tactile::wire::DecodeStatus::kOk &&
-          envelope_.has_tactile_frame()) {
-        const std::uint64_t seq = envelope_.tactile_frame().sequence();
+      if (decoder_.decode({data, payload.size()}) == tactile::wire::DecodeStatus::kOk &&
+          decoder_.envelope().has_tactile_frame()) {
+        const std::uint64_t seq = decoder_.envelope().tactile_frame().sequence();
         if (e->has_sequence && seq > e->last_sequence + 1) e->lost += seq - e->last_sequence - 1;
         if (!e->has_sequence || seq > e->last_sequence) e->last_sequence = seq;
         e->has_sequence = true;
@@ -95,7 +95,7 @@ class TopicCounts {
     return &entries_.back();
   }
   std::vector<Entry> entries_;
-  tactile::v1::Envelope envelope_;
+  tactile::recording::EnvelopeDecoder decoder_;
 };
 
 std::string default_output() {

@@ -1,9 +1,12 @@
-// tactile_record's per-message path allocates nothing once its buffers have grown (STYLE.md 4).
+// The per-message paths of tactile_record and tactile_live allocate nothing once their buffers
+// have grown (STYLE.md 4).
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
+#include "dashboard.hpp"
 #include "process.hpp"
 #include "tactile/recording/log_writer.hpp"
+#include "tactile/wire/envelope.hpp"
 
 namespace tactile::recording {
 namespace {
@@ -37,3 +40,49 @@ TEST(LogWriterAlloc, AppendAllocatesNothingInSteadyState) {
 
 }  // namespace
 }  // namespace tactile::recording
+
+namespace tactile::live {
+namespace {
+
+// tactile_live takes each frame without allocating once it has seen the fingertip.
+TEST(LiveModelAlloc, FramesAllocateNothingInSteadyState) {
+  LiveModel m({});
+  v1::Envelope env;
+  auto* f = env.mutable_tactile_frame();
+  f->set_sensor_id("left");
+  f->set_status(v1::FRAME_STATUS_COMPLETE);
+  for (std::uint32_t e = 0; e < 41; ++e) {
+    auto* r = f->add_elements();
+    r->set_id(e);
+    r->set_contact(e % 3 == 0);
+    r->set_fz_n(0.1 * e);
+    r->set_has_displacement(true);
+    r->set_dy_mm(0.001 * e);
+  }
+  std::vector<std::string> frames;
+  for (std::uint64_t k = 0; k < 60; ++k) {
+    f->set_sequence(k);
+    std::string buf;
+    wire::encode(env, buf);
+    frames.push_back(std::move(buf));
+  }
+  auto add = [&](std::size_t k) {
+    const std::string& b = frames[k];
+    m.add("frame/left", {reinterpret_cast<const std::uint8_t*>(b.data()), b.size()},
+          static_cast<std::int64_t>(k) * 10'000'000);
+  };
+  for (std::size_t k = 0; k < 10; ++k)
+    add(k);
+  std::size_t allocations = 0;
+  {
+    testing::AllocationScope scope;
+    for (std::size_t k = 10; k < 60; ++k)
+      add(k);
+    allocations = scope.count();
+  }
+  EXPECT_EQ(allocations, 0U);
+  EXPECT_EQ(m.state().fingertips.at(0).sequence, 59U);
+}
+
+}  // namespace
+}  // namespace tactile::live
