@@ -1,7 +1,9 @@
 #include "tactile/extractor.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -32,6 +34,11 @@ int floor_int(double v) {
   const int i = static_cast<int>(v);
   return i > v ? i - 1 : i;
 }
+
+// The kernels read up to 16 columns either side of the window (groups of 8 or 16): the weight
+// arrays have that much room before and after the block, zeroed by fixed-size copies.
+constexpr int kWeightPad = 16;
+constexpr float kZeros[kWeightPad] = {};
 
 double soft_edge(double half_width, double distance) {
   return std::clamp(half_width + 0.5 - std::abs(distance), 0.0, 1.0);
@@ -150,10 +157,10 @@ Extractor::Extractor(Calibration cal, ExtractorOptions options)
   int max_side = 1;
   for (const detail::Block& b : blocks_)
     max_side = std::max({max_side, b.width, b.height});
-  wx_.assign(static_cast<std::size_t>(max_side), 0.0F);
+  wx_.assign(static_cast<std::size_t>(max_side + 2 * kWeightPad), 0.0F);
   wxu_ = wx_;
   wxu2_ = wx_;
-  wy_ = wx_;
+  wy_.assign(static_cast<std::size_t>(max_side), 0.0F);
   capture_sum_.assign(static_cast<std::size_t>(cal_.width) * static_cast<std::size_t>(cal_.height),
                       0);
   state_.assign(cal_.elements.size(), ElementState{});
@@ -443,47 +450,40 @@ bool Extractor::windowed_pass(const ElementLayout& el, const ImageView& f, doubl
   return true;
 }
 
-// Fills w[k] = exp(-(first + k - c)^2 / (2 s^2)) for k in [0, n), and with kMoments w*u and
-// w*u^2 beside it where u = first + k - c. A recurrence outward from the pixel nearest c in
-// each direction: every factor is at most 1, so nothing overflows and far weights underflow to 0
-// gracefully, and the rounding is the same on both sides (no bias). Seeds from float exp,
-// products in double; b = exp(-2a), a = 1 / (2 s^2), is shared by the two axes.
+// exp(x) for x in [-87, 0], to about 3e-7 relative, without branches or library calls, so that
+// loops over it vectorise: x = n ln 2 + r with |r| <= ln 2 / 2, a degree-6 polynomial for
+// exp(r), 2^n put into the exponent bits.
+static float exp_nonpositive(float x) noexcept {
+  const float t = x * 1.44269504F;                                // x / ln 2, in [-125.6, 0]
+  const auto n = static_cast<float>(static_cast<int>(t - 0.5F));  // nearest integer, t <= 0
+  const float r = (x - n * 0.693145752F) - n * 1.42860677e-6F;    // ln 2 in two parts
+  float p = 1.0F / 720;
+  p = p * r + 1.0F / 120;
+  p = p * r + 1.0F / 24;
+  p = p * r + 1.0F / 6;
+  p = p * r + 0.5F;
+  p = p * r + 1.0F;
+  p = p * r + 1.0F;
+  const auto scale =
+      std::bit_cast<float>(static_cast<std::uint32_t>(static_cast<int>(n) + 127) << 23);
+  return p * scale;
+}
+
+// Fills w[k] = exp(-a u^2), u = first + k - c, for k in [0, n), and with kMoments w*u and w*u^2
+// beside it (a = 1 / (2 s^2)). Each weight on its own: no drift along the window, and the same
+// to the last bit on both sides of c.
 template <bool kMoments>
-static void gaussian_weights(int first, int n, double c, double a, double b, float* w, float* wu,
+static void gaussian_weights(int first, int n, double c, double a, float* w, float* wu,
                              float* wu2) noexcept {
-  const int kc = std::clamp(floor_int(c + 0.5) - first, 0, n - 1);
-  const double uc = first + kc - c;
-  const auto e = [](double v) { return static_cast<double>(std::exp(static_cast<float>(v))); };
-  const double w0 = e(-a * uc * uc);
-  w[kc] = static_cast<float>(w0);
-  if constexpr (kMoments) {
-    wu[kc] = static_cast<float>(w0 * uc);
-    wu2[kc] = static_cast<float>(w0 * uc * uc);
-  }
-  double wk = w0;
-  double step = e(-a * (2 * uc + 1));
-  double u = uc;
-  for (int k = kc + 1; k < n; ++k) {
-    wk *= step;
-    step *= b;
-    u += 1;
-    w[k] = static_cast<float>(wk);
+  const auto af = static_cast<float>(a);
+  const auto u0 = static_cast<float>(first - c);
+  for (int k = 0; k < n; ++k) {
+    const float u = u0 + static_cast<float>(k);
+    const float wk = exp_nonpositive(-af * u * u);
+    w[k] = wk;
     if constexpr (kMoments) {
-      wu[k] = static_cast<float>(wk * u);
-      wu2[k] = static_cast<float>(wk * u * u);
-    }
-  }
-  wk = w0;
-  step = e(-a * (1 - 2 * uc));
-  u = uc;
-  for (int k = kc - 1; k >= 0; --k) {
-    wk *= step;
-    step *= b;
-    u -= 1;
-    w[k] = static_cast<float>(wk);
-    if constexpr (kMoments) {
-      wu[k] = static_cast<float>(wk * u);
-      wu2[k] = static_cast<float>(wk * u * u);
+      wu[k] = wk * u;
+      wu2[k] = wk * u * u;
     }
   }
 }
@@ -493,7 +493,9 @@ bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x
                               double& sigma) noexcept {
   const detail::Block& b = blocks_[element];
   const double s = sigma;
-  const double reach = opt_.gaussian_reach_sigmas * s;
+  // Beyond 12 sigmas the weights are below 1e-31: capping the reach there keeps every exponent
+  // of the weights within exp_nonpositive's range (-a u^2 >= -72).
+  const double reach = std::min(opt_.gaussian_reach_sigmas, 12.0) * s;
   // x, y lie inside the disk and reach is at most 1024 * gaussian_reach_sigmas / 2: the
   // integer conversions are safe for any sane reach; clamp it anyway.
   const double r = std::min(reach, 1.0e6);
@@ -502,22 +504,21 @@ bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x
   const int col_lo = std::max(b.x0, ceil_int(x - r));
   const int col_hi = std::min(b.x0 + b.width - 1, floor_int(x + r));
   if (row_hi < row_lo || col_hi < col_lo) return false;
-  // Column weights, 0 outside the window: the kernels read groups of up to 16 columns that
-  // reach past it by less than 16 on either side.
+  // Column weights, 0 outside the window up to kWeightPad columns either side.
   const int first = col_lo - b.x0;
   const int end = col_hi - b.x0 + 1;
-  for (int k = std::max(0, first - 16); k < first; ++k)
-    wx_[k] = wxu_[k] = wxu2_[k] = 0.0F;
-  for (int k = end; k < std::min(b.width, end + 16); ++k)
-    wx_[k] = wxu_[k] = wxu2_[k] = 0.0F;
+  float* wx = wx_.data() + kWeightPad;
+  float* wxu = wxu_.data() + kWeightPad;
+  float* wxu2 = wxu2_.data() + kWeightPad;
+  for (float* v : {wx, wxu, wxu2}) {
+    std::memcpy(v + first - kWeightPad, kZeros, sizeof kZeros);
+    std::memcpy(v + end, kZeros, sizeof kZeros);
+  }
   const double a = 1.0 / (2.0 * s * s);
-  const double ratio = std::exp(-2.0 * a);
-  gaussian_weights<true>(col_lo, end - first, x, a, ratio, wx_.data() + first, wxu_.data() + first,
-                         wxu2_.data() + first);
-  gaussian_weights<false>(row_lo, row_hi - row_lo + 1, y, a, ratio, wy_.data(), nullptr, nullptr);
+  gaussian_weights<true>(col_lo, end - first, x, a, wx + first, wxu + first, wxu2 + first);
+  gaussian_weights<false>(row_lo, row_hi - row_lo + 1, y, a, wy_.data(), nullptr, nullptr);
 
-  const detail::GaussWindow win{row_lo,     row_hi,      col_lo,       col_hi,    y,
-                                wx_.data(), wxu_.data(), wxu2_.data(), wy_.data()};
+  const detail::GaussWindow win{row_lo, row_hi, col_lo, col_hi, y, wx, wxu, wxu2, wy_.data()};
   const detail::GaussSums g = sizeof(Pixel) == 1
                                   ? kernels_->gauss_u8(b, frame_ref(f), block_data(), win)
                                   : kernels_->gauss_u16(b, frame_ref(f), block_data(), win);
