@@ -167,11 +167,13 @@ int main(int argc, char** argv) {
   app.add_option("endpoints", opt.endpoints,
                  "publishers: sensor_node (frames, stats) and hand_node's events endpoint");
   app.add_option("--curve", opt.curve,
-                 "ENDPOINT=SERVER.pub: subscribe with CURVE (repeatable; docs/security.md)");
+                 "ENDPOINT=SERVER.pub: subscribe with CURVE (repeatable; docs/security.md)")
+      ->allow_extra_args(false);
   app.add_option("--client-key", opt.client_key, "this program's CURVE key pair (.key)");
   app.add_option("--calibration", opt.calibrations,
                  "calibration files: draw the elements where their disks are (default: rings of "
-                 "1, 8, 16, 16)");
+                 "1, 8, 16, 16)")
+      ->allow_extra_args(false);
   app.add_option("--f1", opt.f1, "F1 [N] for TOUCH")->capture_default_str();
   app.add_option("--f2", opt.f2, "F2 [N] for OVER and the force digits")->capture_default_str();
   app.add_option("--dr", opt.dr, "dr [mm] for SLIP")->capture_default_str();

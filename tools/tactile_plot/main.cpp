@@ -133,16 +133,20 @@ int main(int argc, char** argv) {
   app.add_option("-o,--out", opt.out, "folder for the PNG files")->capture_default_str();
   app.add_option("--figure", opt.figures,
                  "shear, fig10, forces, timeline, latency or all (repeatable)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->allow_extra_args(false);
   app.add_option("--at", opt.at,
                  "seconds from the log's start of a shear field / force map (repeatable; default: "
-                 "the frame with the largest total shear)");
-  app.add_option("--sensor", opt.sensors, "plot only this fingertip (repeatable)");
+                 "the frame with the largest total shear)")
+      ->allow_extra_args(false);
+  app.add_option("--sensor", opt.sensors, "plot only this fingertip (repeatable)")
+      ->allow_extra_args(false);
   app.add_option("--element", opt.element,
                  "Fig. 10: this element's dy instead of the element moving most");
   app.add_option(
-      "--calibration", opt.calibrations,
-      "calibration files: element positions for the maps (default: mean centroids in the log)");
+         "--calibration", opt.calibrations,
+         "calibration files: element positions for the maps (default: mean centroids in the log)")
+      ->allow_extra_args(false);
   app.add_option("--f1", opt.f1, "F1 [N] for the TOUCH flag")->capture_default_str();
   app.add_option("--f2", opt.f2, "F2 [N] for the OVER flag")->capture_default_str();
   app.add_option("--dr", opt.dr, "dr [mm] for the SLIP flag")->capture_default_str();

@@ -228,7 +228,8 @@ int main(int argc, char** argv) {
                  "hand_node events endpoint, tcp://127.0.0.1:5557 (rig ground truth)");
   app.add_option("--curve", opt.curve,
                  "ENDPOINT=SERVER.pub: subscribe to ENDPOINT with CURVE, trusting the publisher "
-                 "whose public key is in the file (repeatable; docs/security.md)");
+                 "whose public key is in the file (repeatable; docs/security.md)")
+      ->allow_extra_args(false);
   app.add_option("--client-key", opt.client_key,
                  "this recorder's CURVE key pair (a .key file of tactile_keygen); default: a fresh "
                  "pair for this run");
@@ -236,7 +237,8 @@ int main(int argc, char** argv) {
                  "log file to write (default tactile-YYYYmmdd-HHMMSS.tlog, UTC)");
   app.add_option("--topic", opt.topics,
                  "topic prefix to record (repeatable; \"\" records every topic)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->allow_extra_args(false);
   app.add_flag("--raw-frames", opt.raw_frames,
                "also record raw camera frames (topic raw/<sensor_id>, published by a sensor when "
                "asked; docs/recording.md)");

@@ -295,7 +295,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--as-fast-as-possible", opt.fast,
                "no pacing: as fast as the subscribers take the messages (none is dropped)");
-  app.add_option("--topic", opt.topics, "play only topics with this prefix (repeatable)");
+  app.add_option("--topic", opt.topics, "play only topics with this prefix (repeatable)")
+      ->allow_extra_args(false);
   app.add_option("--wait-subscriptions", opt.wait_subscriptions,
                  "start once this many subscriptions arrived (a subscriber sends one per topic "
                  "prefix)");
