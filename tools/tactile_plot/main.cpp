@@ -12,6 +12,7 @@
 #include "tactile/recording/log_reader.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/log.hpp"
+#include "tactile/util/stop.hpp"
 
 namespace {
 
@@ -74,7 +75,12 @@ int run(const Options& opt) {
   ReadStatus s;
   std::uint64_t n = 0;
   std::int64_t next_progress = tactile::util::monotonic_ns() + 2'000'000'000;
+  tactile::util::install_stop_handlers();
   while ((s = reader.next(rec)) == ReadStatus::kRecord) {
+    if (tactile::util::stop_requested()) {
+      tactile::util::log_info("stopped before drawing");
+      return 0;
+    }
     data.add(rec);
     if ((++n & 1023) == 0 && tactile::util::monotonic_ns() >= next_progress) {
       next_progress = tactile::util::monotonic_ns() + 2'000'000'000;

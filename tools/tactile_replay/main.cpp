@@ -101,6 +101,7 @@ int info(const Options& opt) {
   Progress progress(r);
   ReadStatus s;
   while ((s = r.next(rec)) == ReadStatus::kRecord) {
+    if (tactile::util::stop_requested()) return 0;
     if (n == 0) first = rec.receive_time_ns();
     last = rec.receive_time_ns();
     ++counts[rec.topic()];
@@ -142,6 +143,10 @@ int remeasure(const Options& opt) {
   ReadStatus s;
   std::uint64_t n = 0;
   while ((s = r.next(rec)) == ReadStatus::kRecord) {
+    if (tactile::util::stop_requested()) {
+      tactile::util::log_info("stopped after {} records", n);
+      return 0;
+    }
     rm.add(rec);
     progress.tick(++n);
   }
@@ -200,7 +205,6 @@ int play(const Options& opt) {
   if (!opt.secret_key.empty())
     security = tactile::wire::ServerSecurity{tactile::wire::load_key_pair(opt.secret_key), {}};
   LogReader r(opt.log);
-  tactile::util::install_stop_handlers();
   zmq::context_t ctx;
   tactile::replay::PlayerOptions po;
   po.endpoint = opt.publish;
@@ -339,6 +343,7 @@ int main(int argc, char** argv) {
   }
   try {
     tactile::util::set_log_level(tactile::util::parse_log_level(opt.log_level));
+    tactile::util::install_stop_handlers();
     if (opt.info) return info(opt);
     if (!opt.remeasure.empty()) return remeasure(opt);
     return play(opt);
