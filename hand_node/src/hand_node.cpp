@@ -55,6 +55,22 @@ void HandNode::send_envelope() {
 
 void HandNode::send_command(const control::Command& c, std::int64_t now_ns) {
   (void)now_ns;
+  switch (c.kind) {
+    case control::CommandKind::kMoveTo:
+      last_motion_ = c;
+      break;
+    case control::CommandKind::kFingerVelocities:
+      last_velocities_ = c;
+      break;
+    case control::CommandKind::kHold:
+    case control::CommandKind::kOpen:
+    case control::CommandKind::kStop:
+      last_motion_.reset();
+      last_velocities_.reset();
+      break;
+    case control::CommandKind::kNone:
+      break;
+  }
   wire::fill_arm_command(c, ++command_sequence_, util::realtime_ns(), answers(), ids_,
                          *out_.mutable_arm_command());
   send_envelope();
@@ -118,6 +134,17 @@ void HandNode::on_arm_message() {
     }
     ++counters_.arm_states;
     have_arm_ = true;
+    if (arm_state_.deadman && !deadman_seen_) {
+      deadman_seen_ = true;
+      // The arm held because it heard nothing from us for a while (we were not scheduled, or
+      // the link stalled). We are here: carry on with what the arm was doing.
+      util::log_warn("the arm controller's deadman held the arm: resuming the current motion");
+      const std::int64_t now = util::monotonic_ns();
+      if (last_motion_) send_command(*last_motion_, now);
+      if (last_velocities_) send_command(*last_velocities_, now);
+    } else if (!arm_state_.deadman) {
+      deadman_seen_ = false;
+    }
     last_arm_ns_ = util::monotonic_ns();
     if (arm_silent_reported_) {
       util::log_info("arm controller heard again");

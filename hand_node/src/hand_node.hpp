@@ -77,6 +77,10 @@ class HandNode {
   std::int64_t last_sent_ns_ = 0;
   std::int64_t last_update_ns_ = 0;
   std::uint64_t command_sequence_ = 0;
+  // What the arm is doing on our word, to resume it after the arm controller's deadman held it.
+  std::optional<control::Command> last_motion_;
+  std::optional<control::Command> last_velocities_;
+  bool deadman_seen_ = false;
   bool stale_ = false;
   HandCounters counters_;
 };

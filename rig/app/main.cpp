@@ -1,5 +1,6 @@
 // rig: the simulated rig (docs/rig.md). `rig --lockstep --scenario FILE --report FILE.json` runs
-// the scenario in one process on simulated time; the real-time mode is not built yet.
+// the scenario in one process on simulated time; `rig --scenario FILE` runs it in real time with
+// fake GigE Vision cameras and the arm controller, for sensor_node and hand_node.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
@@ -11,9 +12,11 @@
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/plots.hpp"
+#include "tactile/rig/realtime.hpp"
 #include "tactile/rig/scenario.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
+#include "tactile/util/stop.hpp"
 
 namespace {
 
@@ -22,7 +25,13 @@ int run(int argc, char** argv) {
       "rig: the simulated rig of the tactile slippage control system (docs/rig.md).\n"
       "  rig --lockstep --scenario FILE --report FILE.json [--plots DIR]\n"
       "runs the grasp-move-twist scenario in one process on simulated time, with the real\n"
-      "measurement and control cores in the loop; the same seed gives the same report."};
+      "measurement and control cores in the loop; the same seed gives the same report.\n"
+      "  rig --scenario FILE [--report FILE.json] [--plots DIR]\n"
+      "runs it in real time: one fake GigE Vision camera per fingertip (127.0.0.2, 127.0.0.3),\n"
+      "the arm controller (ROUTER, tcp://*:5556, with a deadman) and ground truth (tcp://*:5557),\n"
+      "for sensor_node and hand_node; the report scores what they measured and decided.\n"
+      "  rig --scenario FILE --write-configs DIR\n"
+      "writes the sensors' calibrations and sensor_node/hand_node configurations for it."};
   std::string scenario_path;
   std::string report_path;
   std::string plots_dir;
@@ -45,6 +54,24 @@ int run(int argc, char** argv) {
   app.add_option("--dt", dt_s, "physics step (s), overriding the scenario's")
       ->check(CLI::Range(1e-7, 1e-3));
   app.add_option("--log-level", log_level, "debug, info, warn or error");
+  tactile::rig::RealtimeOptions rt;
+  std::string cameras;
+  std::string write_configs;
+  std::vector<std::string> observe_frames;
+  app.add_option("--cameras", cameras, "real time: the two cameras' IPv4 addresses, left,right (default 127.0.0.2,127.0.0.3)");
+  app.add_option("--arm", rt.arm_endpoint, "real time: the arm controller's endpoint")->capture_default_str();
+  app.add_option("--truth", rt.truth_endpoint, "real time: ground-truth PUB endpoint (empty: none)")->capture_default_str();
+  app.add_option("--observe-frames", observe_frames, "real time: sensor_node endpoint to score (repeatable; default tcp://127.0.0.1:5555)")
+      ->allow_extra_args(false);
+  app.add_option("--observe-events", rt.observe_events, "real time: hand_node's event endpoint")->capture_default_str();
+  app.add_option("--deadman", rt.deadman_s, "real time: hold the arm after this long without hand_node (s)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.005, 10.0));
+  app.add_option("--wait-for-hand", rt.wait_for_hand_s, "real time: give up when no hand_node speaks within this (s)")
+      ->capture_default_str();
+  app.add_flag("--full-noise", rt.full_noise, "real time: fresh noise on every pixel of every frame, not only the element disks");
+  app.add_option("--write-configs", write_configs,
+                 "write left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml for this scenario into DIR and exit");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -60,14 +87,42 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "rig: --log-level: %s\n", e.what());
     return 2;
   }
-  if (!lockstep) {
-    std::fprintf(stderr,
-                 "rig: the real-time mode (fake GigE Vision cameras and arm controller) is not "
-                 "built yet; run with --lockstep\n");
-    return 3;
-  }
-
   const tactile::rig::Scenario scenario = tactile::rig::load_scenario(scenario_path);
+  if (!cameras.empty()) {
+    const auto comma = cameras.find(',');
+    if (comma == std::string::npos) {
+      std::fprintf(stderr, "rig: --cameras needs two addresses, left,right; got '%s'\n", cameras.c_str());
+      return 2;
+    }
+    rt.camera_addresses = {cameras.substr(0, comma), cameras.substr(comma + 1)};
+  }
+  if (!observe_frames.empty()) rt.observe_frames = observe_frames;
+  if (!write_configs.empty()) {
+    tactile::rig::write_node_configs(scenario, write_configs, rt);
+    tactile::util::log_info("wrote left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml into {}", write_configs);
+    return 0;
+  }
+  if (!lockstep) {
+    tactile::util::install_stop_handlers();
+    rt.record_series = !plots_dir.empty() || !series_path.empty();
+    const tactile::rig::RealtimeResult result = tactile::rig::run_realtime(scenario, rt);
+    const std::string json = tactile::rig::report_json(result.run.report);
+    if (!report_path.empty()) {
+      tactile::util::write_file_atomic(report_path, json);
+      tactile::util::log_info("report written to {}", report_path);
+    } else {
+      std::fputs(json.c_str(), stdout);
+    }
+    if (!series_path.empty()) {
+      tactile::util::write_file_atomic(series_path, tactile::rig::series_csv(result.run.series));
+    }
+    if (!plots_dir.empty()) {
+      for (const auto& path : tactile::rig::write_plots(result.run, plots_dir)) {
+        tactile::util::log_info("wrote {}", path.string());
+      }
+    }
+    return 0;
+  }
   tactile::rig::LockstepOptions options;
   options.dt_s = dt_s;
   options.record_series = !plots_dir.empty() || !series_path.empty();

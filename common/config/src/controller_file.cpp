@@ -1,5 +1,6 @@
 #include "tactile/config/controller_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -75,6 +76,26 @@ std::vector<std::string> controller_config_keys() {
   for (const auto& f : kCounts)
     keys.emplace_back(f.name);
   return keys;
+}
+
+bool set_controller_field(control::Config& cfg, std::string_view key, double value) {
+  for (const auto& f : kDoubles) {
+    if (key == f.name) {
+      cfg.*(f.member) = value;
+      return true;
+    }
+  }
+  for (const auto& f : kCounts) {
+    if (key == f.name) {
+      cfg.*(f.member) = static_cast<std::uint32_t>(std::clamp(std::round(value), 0.0, 1e6));
+      return true;
+    }
+  }
+  if (key == "twist_angle_deg") {
+    cfg.twist_angle_rad = value * std::numbers::pi / 180.0;
+    return true;
+  }
+  return false;
 }
 
 control::Config parse_controller_config(const Node& section, std::vector<std::string>* warnings) {

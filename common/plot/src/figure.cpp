@@ -297,21 +297,26 @@ class Canvas {
   void polyline(const std::vector<P>& pts, Color c, int width, bool dashed) {
     double phase = 0;
     for (std::size_t i = 1; i < pts.size(); ++i) {
-      const P a = pts[i - 1];
-      const P b = pts[i];
-      if (!ok(a) || !ok(b)) {
+      const P pa = pts[i - 1];
+      const P pb = pts[i];
+      if (!ok(pa) || !ok(pb)) {
         phase = 0;
         continue;
       }
       if (!dashed) {
-        segment(a, b, c, width);
+        segment(pa, pb, c, width);
+        continue;
+      }
+      // Dash only the visible part: a long segment mostly off the panel would otherwise cost
+      // one dash per 13 pixels of its whole length.
+      P a = pa;
+      P b = pb;
+      const double m = width + 2.0;
+      if (!clip(a, b, l_.left - m, l_.top - m, l_.right - 1 + m, l_.bottom - 1 + m)) {
+        phase = 0;
         continue;
       }
       const double len = std::hypot(b.x - a.x, b.y - a.y);
-      if (!(len < 1e6)) {
-        segment(a, b, c, width);  // off-screen giant: clipping keeps it cheap
-        continue;
-      }
       double t = 0;
       while (t < len) {
         const double on = phase < 8 ? 8 - phase : 0;

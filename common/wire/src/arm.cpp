@@ -238,6 +238,14 @@ v1::EventKind to_proto(control::EventKind kind) {
   return static_cast<v1::EventKind>(static_cast<int>(kind));
 }
 
+std::optional<control::Phase> phase_from_string(std::string_view name) {
+  for (int p = 0; p <= static_cast<int>(control::Phase::kAborted); ++p) {
+    const auto phase = static_cast<control::Phase>(p);
+    if (name == control::to_string(phase)) return phase;
+  }
+  return std::nullopt;
+}
+
 void fill_event(const control::Event& e, std::int64_t time_ns, const Answers& answers,
                 const FingertipIds& ids, v1::Event& out) {
   out.set_time_ns(time_ns);

@@ -594,7 +594,20 @@ std::string report_json(const Report& r) {
   json_number(o, r.force_rmse_shear_N);
   o += "},\n ";
   key("latency_ms");
-  o += "null,\n ";
+  if (r.latency_ms) {
+    o += "{";
+    key("p50");
+    json_number(o, r.latency_ms->p50);
+    o += ", ";
+    key("p99");
+    json_number(o, r.latency_ms->p99);
+    o += ", ";
+    key("max");
+    json_number(o, r.latency_ms->max);
+    o += "},\n ";
+  } else {
+    o += "null,\n ";
+  }
   key("lockstep");
   o += "{";
   key("seed");

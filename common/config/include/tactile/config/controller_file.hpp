@@ -18,4 +18,8 @@ control::Config parse_controller_config(const Node& section,
 // The names parse_controller_config() knows, in the order of docs/control.md.
 std::vector<std::string> controller_config_keys();
 
+// Sets one numeric field by its name (a count is rounded; twist_angle_deg converts); false for a
+// name that is not a numeric field. Does not validate: call Config::validate() after the last.
+bool set_controller_field(control::Config& cfg, std::string_view key, double value);
+
 }  // namespace tactile::config

@@ -3,8 +3,10 @@
 // ArmCommand, ArmState and Event <-> control core types. Pure functions: no sockets, no clocks.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 
 #include "tactile/control/types.hpp"
 #include "tactile/v1/tactile.pb.h"
@@ -82,5 +84,7 @@ void fill_event(const control::Event& event, std::int64_t time_ns, const Answers
                 const FingertipIds& ids, v1::Event& out);
 
 v1::EventKind to_proto(control::EventKind kind);
+// The control phase named by an Event's `phase` text (control::to_string); nullopt if none.
+std::optional<control::Phase> phase_from_string(std::string_view name);
 
 }  // namespace tactile::wire

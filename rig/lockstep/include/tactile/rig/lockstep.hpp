@@ -46,6 +46,13 @@ struct Report {
   SlipMetrics slip;
   double force_rmse_normal_N = 0;
   double force_rmse_shear_N = 0;
+  // Distributed runs only: camera timestamp -> ArmCommand received by the arm controller (ms).
+  struct Latency {
+    double p50 = 0;
+    double p99 = 0;
+    double max = 0;
+  };
+  std::optional<Latency> latency_ms;
   // Ours.
   std::uint64_t seed = 0;
   double sim_time_s = 0;
