@@ -7,6 +7,8 @@
 #include "src/hand_node.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
+#include "tactile/util/text.hpp"
+#include "tactile/wire/envelope.hpp"
 
 namespace {
 
@@ -46,6 +48,7 @@ int run(int argc, char** argv) {
     if (!arm.empty()) cfg.arm = arm;
     if (!events.empty()) cfg.events = events;
     tactile::util::install_stop_handlers();
+    tactile::wire::install_protobuf_log_handler();
     zmq::context_t ctx;
     tactile::hand::HandNode node(std::move(cfg), ctx);
     switch (node.run()) {
@@ -59,7 +62,7 @@ int run(int argc, char** argv) {
         return 3;
     }
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "hand_node: %s\n", e.what());
+    std::fprintf(stderr, "hand_node: %s\n", tactile::util::one_line(e.what()).c_str());
     return 1;
   }
   return 0;

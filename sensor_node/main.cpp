@@ -10,6 +10,8 @@
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
+#include "tactile/util/text.hpp"
+#include "tactile/wire/envelope.hpp"
 
 namespace {
 
@@ -22,6 +24,7 @@ int run(int argc, char** argv) {
   std::string calibration;
   std::string reference;
   std::string publish;
+  std::string state_dir;
   std::string log_level = "info";
   double fps = 0;
   CLI::App app{
@@ -36,6 +39,10 @@ int run(int argc, char** argv) {
   app.add_option("--reference", reference,
                  "one-camera case: use this no-load frame (PGM) instead of capturing one");
   app.add_option("--publish", publish, "PUB endpoint (default tcp://*:5555 or the file's)");
+  app.add_option("--state-dir", state_dir,
+                 "folder for what sensor_node keeps between runs (relative reference_cache paths); "
+                 "default: the "
+                 "configuration file's folder");
   app.add_option("--fps", fps, "one-camera case: frame rate (default 100 or the file's)");
   app.add_option("--log-level", log_level, "debug, info, warn or error")->capture_default_str();
   try {
@@ -50,7 +57,7 @@ int run(int argc, char** argv) {
     std::vector<std::string> warnings;
     SensorConfig cfg = tactile::sensor::default_sensor_config();
     if (!config_path.empty()) {
-      cfg = tactile::sensor::load_sensor_config(config_path, &warnings);
+      cfg = tactile::sensor::load_sensor_config(config_path, &warnings, state_dir);
     } else if (camera.empty() || calibration.empty()) {
       std::fprintf(stderr,
                    "sensor_node: give --config FILE, or --camera and --calibration (try --help)\n");
@@ -83,6 +90,7 @@ int run(int argc, char** argv) {
       tactile::util::log_warn("{}", w);
 
     tactile::util::install_stop_handlers();
+    tactile::wire::install_protobuf_log_handler();
     zmq::context_t ctx;
     tactile::sensor::SharedPublisher pub(ctx, cfg.publish, cfg.security ? &*cfg.security : nullptr);
     tactile::util::log_info("publishing on {}{}", pub.endpoint(), cfg.security ? " (CURVE)" : "");
@@ -117,7 +125,7 @@ int run(int argc, char** argv) {
     }
     return code;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "sensor_node: %s\n", e.what());
+    std::fprintf(stderr, "sensor_node: %s\n", tactile::util::one_line(e.what()).c_str());
     return 1;
   }
 }

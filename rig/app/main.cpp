@@ -17,6 +17,8 @@
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
+#include "tactile/util/text.hpp"
+#include "tactile/wire/envelope.hpp"
 
 namespace {
 
@@ -58,20 +60,31 @@ int run(int argc, char** argv) {
   std::string cameras;
   std::string write_configs;
   std::vector<std::string> observe_frames;
-  app.add_option("--cameras", cameras, "real time: the two cameras' IPv4 addresses, left,right (default 127.0.0.2,127.0.0.3)");
-  app.add_option("--arm", rt.arm_endpoint, "real time: the arm controller's endpoint")->capture_default_str();
-  app.add_option("--truth", rt.truth_endpoint, "real time: ground-truth PUB endpoint (empty: none)")->capture_default_str();
-  app.add_option("--observe-frames", observe_frames, "real time: sensor_node endpoint to score (repeatable; default tcp://127.0.0.1:5555)")
+  app.add_option(
+      "--cameras", cameras,
+      "real time: the two cameras' IPv4 addresses, left,right (default 127.0.0.2,127.0.0.3)");
+  app.add_option("--arm", rt.arm_endpoint, "real time: the arm controller's endpoint")
+      ->capture_default_str();
+  app.add_option("--truth", rt.truth_endpoint, "real time: ground-truth PUB endpoint (empty: none)")
+      ->capture_default_str();
+  app.add_option(
+         "--observe-frames", observe_frames,
+         "real time: sensor_node endpoint to score (repeatable; default tcp://127.0.0.1:5555)")
       ->allow_extra_args(false);
-  app.add_option("--observe-events", rt.observe_events, "real time: hand_node's event endpoint")->capture_default_str();
-  app.add_option("--deadman", rt.deadman_s, "real time: hold the arm after this long without hand_node (s)")
+  app.add_option("--observe-events", rt.observe_events, "real time: hand_node's event endpoint")
+      ->capture_default_str();
+  app.add_option("--deadman", rt.deadman_s,
+                 "real time: hold the arm after this long without hand_node (s)")
       ->capture_default_str()
       ->check(CLI::Range(0.005, 10.0));
-  app.add_option("--wait-for-hand", rt.wait_for_hand_s, "real time: give up when no hand_node speaks within this (s)")
+  app.add_option("--wait-for-hand", rt.wait_for_hand_s,
+                 "real time: give up when no hand_node speaks within this (s)")
       ->capture_default_str();
-  app.add_flag("--full-noise", rt.full_noise, "real time: fresh noise on every pixel of every frame, not only the element disks");
+  app.add_flag("--full-noise", rt.full_noise,
+               "real time: fresh noise on every pixel of every frame, not only the element disks");
   app.add_option("--write-configs", write_configs,
-                 "write left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml for this scenario into DIR and exit");
+                 "write left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml for this "
+                 "scenario into DIR and exit");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -91,7 +104,8 @@ int run(int argc, char** argv) {
   if (!cameras.empty()) {
     const auto comma = cameras.find(',');
     if (comma == std::string::npos) {
-      std::fprintf(stderr, "rig: --cameras needs two addresses, left,right; got '%s'\n", cameras.c_str());
+      std::fprintf(stderr, "rig: --cameras needs two addresses, left,right; got '%s'\n",
+                   cameras.c_str());
       return 2;
     }
     rt.camera_addresses = {cameras.substr(0, comma), cameras.substr(comma + 1)};
@@ -99,11 +113,13 @@ int run(int argc, char** argv) {
   if (!observe_frames.empty()) rt.observe_frames = observe_frames;
   if (!write_configs.empty()) {
     tactile::rig::write_node_configs(scenario, write_configs, rt);
-    tactile::util::log_info("wrote left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml into {}", write_configs);
+    tactile::util::log_info(
+        "wrote left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml into {}", write_configs);
     return 0;
   }
   if (!lockstep) {
     tactile::util::install_stop_handlers();
+    tactile::wire::install_protobuf_log_handler();
     rt.record_series = !plots_dir.empty() || !series_path.empty();
     const tactile::rig::RealtimeResult result = tactile::rig::run_realtime(scenario, rt);
     const std::string json = tactile::rig::report_json(result.run.report);
@@ -178,7 +194,7 @@ int main(int argc, char** argv) {
   try {
     return run(argc, argv);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "rig: %s\n", e.what());
+    std::fprintf(stderr, "rig: %s\n", tactile::util::one_line(e.what()).c_str());
     return 1;
   }
 }

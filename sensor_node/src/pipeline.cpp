@@ -53,9 +53,10 @@ void Pipeline::wait(double seconds, const std::atomic<bool>& stop) const {
   }
 }
 
-bool Pipeline::connect(const std::atomic<bool>& stop) {
+bool Pipeline::connect(const std::atomic<bool>& stop, bool initial) {
   double backoff = cfg_.retry_initial_s;
-  bool first = true;
+  // start() opens a camera the first time; after a failure only reopen() tears it down first.
+  bool first = initial;
   while (!stop) {
     bool ok = false;
     std::string why;
@@ -156,7 +157,7 @@ void Pipeline::publish_stats() {
 void Pipeline::run(const std::atomic<bool>& stop) noexcept {
   try {
     const bool have_reference = load_reference();
-    if (!connect(stop)) return;
+    if (!connect(stop, true)) return;
     if (!have_reference) {
       extractor_.begin_reference();
       capturing_reference_ = true;
@@ -178,7 +179,7 @@ void Pipeline::run(const std::atomic<bool>& stop) noexcept {
         util::log_warn("{}: no frame for {:.2f} s ({}): reopening the camera", cfg_.sensor_id,
                        cfg_.frame_timeout_s, camera::to_string(frame.status));
         extractor_.forget_previous();
-        if (!connect(stop)) break;
+        if (!connect(stop, false)) break;
         continue;
       }
       if (frame.first_after_start) extractor_.forget_previous();

@@ -70,7 +70,7 @@ class Pipeline {
   const std::string& fatal_error() const { return fatal_; }
 
  private:
-  bool connect(const std::atomic<bool>& stop);
+  bool connect(const std::atomic<bool>& stop, bool initial);
   bool load_reference();
   void publish(const camera::Frame& frame, v1::FrameStatus status, double measure_us);
   void publish_stats();

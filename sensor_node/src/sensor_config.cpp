@@ -30,7 +30,8 @@ double positive(const config::Node& n, const char* key, double fallback) {
 }  // namespace
 
 SensorConfig load_sensor_config(const std::filesystem::path& path,
-                                std::vector<std::string>* warnings) {
+                                std::vector<std::string>* warnings,
+                                const std::filesystem::path& state_dir) {
   const config::Node root = config::load_yaml_file(path);
   if (!root.is_map()) root.fail("a sensor_node configuration must be a YAML mapping");
   const auto warn = [&](const config::Node& n, std::initializer_list<std::string_view> known) {
@@ -96,7 +97,8 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
                             cc.sensor_id + "'");
     }
     if (auto r = c.find("reference")) cc.reference = base / r->as_string();
-    if (auto r = c.find("reference_cache")) cc.reference_cache = base / r->as_string();
+    if (auto r = c.find("reference_cache"))
+      cc.reference_cache = (state_dir.empty() ? base : state_dir) / r->as_string();
     cc.camera.frame_rate_hz = positive(c, "fps", cc.camera.frame_rate_hz);
     cc.camera.packet_size_bytes = c.get("packet_size", cc.camera.packet_size_bytes);
     const std::int64_t sock =

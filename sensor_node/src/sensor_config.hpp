@@ -39,9 +39,11 @@ struct SensorConfig {
 SensorConfig default_sensor_config();
 
 // Loads and checks a file; throws config::ConfigError naming file, line, key and value. Paths in
-// the file are relative to its folder.
+// the file are relative to its folder, but a relative reference_cache is relative to
+// `state_dir` when one is given (a writable place for what the program keeps between runs).
 SensorConfig load_sensor_config(const std::filesystem::path& path,
-                                std::vector<std::string>* warnings);
+                                std::vector<std::string>* warnings,
+                                const std::filesystem::path& state_dir = {});
 
 // Fills the camera's image settings from its calibration and checks them.
 void finish_camera_config(CameraConfig& c);

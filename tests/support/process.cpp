@@ -2,7 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -37,13 +37,14 @@ std::filesystem::path make_temp_dir(const char* prefix) {
 
 Process::Process(std::vector<std::string> argv, std::vector<std::string> extra_env)
     : dir_(make_temp_dir("tactile-proc-")) {
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
   const std::string out = (dir_ / "out").string();
   const std::string err = (dir_ / "err").string();
-  posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  // Everything the child needs is prepared before fork: after it, only async-signal-safe calls.
+  const int null_fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+  const int out_fd = ::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const int err_fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (null_fd < 0 || out_fd < 0 || err_fd < 0)
+    throw std::runtime_error("cannot open the output files");
   std::vector<char*> args;
   for (auto& a : argv)
     args.push_back(a.data());
@@ -57,9 +58,22 @@ Process::Process(std::vector<std::string> argv, std::vector<std::string> extra_e
   for (auto& e : env_store)
     env.push_back(e.data());
   env.push_back(nullptr);
-  const int rc = posix_spawn(&pid_, args[0], &fa, nullptr, args.data(), env.data());
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) throw std::runtime_error("cannot start " + argv[0] + ": " + std::strerror(rc));
+  const pid_t parent = ::getpid();
+  pid_ = ::fork();
+  if (pid_ < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
+  if (pid_ == 0) {
+    // A test that dies takes its programs with it.
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(127);
+    ::dup2(null_fd, 0);
+    ::dup2(out_fd, 1);
+    ::dup2(err_fd, 2);
+    ::execvpe(args[0], args.data(), env.data());
+    ::_exit(127);
+  }
+  ::close(null_fd);
+  ::close(out_fd);
+  ::close(err_fd);
 }
 
 Process::~Process() {

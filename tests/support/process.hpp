@@ -21,7 +21,8 @@ struct ProcessResult {
 
 class Process {
  public:
-  // Starts `argv[0]` (a path) with the arguments. Standard input is /dev/null.
+  // Starts argv[0] (looked up in PATH when it has no slash) with the arguments. Standard input is
+  // /dev/null. The child is killed (SIGKILL) if the test process dies first.
   explicit Process(std::vector<std::string> argv, std::vector<std::string> extra_env = {});
   ~Process();  // kills (SIGKILL) a process still running
   Process(const Process&) = delete;

@@ -14,6 +14,7 @@
 #include "tactile/util/json.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/pgm.hpp"
+#include "tactile/util/text.hpp"
 
 namespace {
 
@@ -200,7 +201,7 @@ int main(int argc, char** argv) {
   try {
     return run(opt);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactile_extract: %s\n", e.what());
+    std::fprintf(stderr, "tactile_extract: %s\n", tactile::util::one_line(e.what()).c_str());
     return 1;
   }
 }

@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
+#include "tactile/util/text.hpp"
 #include "tactile/wire/security.hpp"
 
 int main(int argc, char** argv) {
@@ -29,7 +30,7 @@ int main(int argc, char** argv) {
                    dir.c_str(), name.c_str(), dir.c_str(), name.c_str());
     }
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactile_keygen: %s\n", e.what());
+    std::fprintf(stderr, "tactile_keygen: %s\n", tactile::util::one_line(e.what()).c_str());
     return 1;
   }
   return 0;

@@ -364,7 +364,12 @@ struct AravisCamera::Impl {
   }
 
   void push_back(ArvBuffer* buffer) noexcept {
-    if (buffer != nullptr && stream) arv_stream_push_buffer(stream.get(), buffer);
+    if (buffer == nullptr || !stream) return;
+    // A frame whose leader packet is lost would otherwise come back with the id and timestamp
+    // of this buffer's previous use.
+    arv_buffer_set_frame_id(buffer, 0);
+    arv_buffer_set_timestamp(buffer, 0);
+    arv_stream_push_buffer(stream.get(), buffer);
   }
 
   void release() noexcept {
@@ -524,21 +529,36 @@ struct AravisCamera::Impl {
 AravisCamera::AravisCamera(AravisCameraOptions options)
     : impl_(std::make_unique<Impl>(std::move(options))) {}
 
-AravisCamera::~AravisCamera() = default;
+// Aravis is not safe for opening, configuring and closing several cameras on several threads
+// at once (upstream issue 159: GLib errors, a camera that never delivers): those steps take
+// one process-wide lock. Frames still flow in parallel.
+static std::mutex& setup_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+AravisCamera::~AravisCamera() {
+  std::lock_guard lock(setup_mutex());
+  impl_.reset();
+}
 
 void AravisCamera::open() {
+  std::lock_guard lock(setup_mutex());
   impl_->open();
 }
 
 void AravisCamera::start() {
+  std::lock_guard lock(setup_mutex());
   impl_->start();
 }
 
 void AravisCamera::stop() noexcept {
+  std::lock_guard lock(setup_mutex());
   impl_->stop();
 }
 
 bool AravisCamera::reopen() noexcept {
+  std::lock_guard lock(setup_mutex());
   if (is_ipv4(impl_->options.camera) &&
       !gvcp_device_answers(impl_->options.camera, std::chrono::milliseconds(300))) {
     impl_->last_error = impl_->where() + ": no answer over GVCP (camera off or unreachable)";

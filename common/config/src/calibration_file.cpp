@@ -4,6 +4,7 @@
 
 #include "tactile/config/yaml.hpp"
 #include "tactile/util/files.hpp"
+#include "tactile/util/text.hpp"
 
 namespace tactile::config {
 namespace {
@@ -139,7 +140,7 @@ Calibration load_calibration(const std::filesystem::path& path,
   try {
     text = util::read_file(path);
   } catch (const std::exception& e) {
-    throw ConfigError(e.what());
+    throw ConfigError(util::one_line(e.what()));
   }
   return parse_calibration(text, path.string(), warnings);
 }

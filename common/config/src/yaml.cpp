@@ -3,8 +3,11 @@
 #include <cmath>
 
 #include "tactile/util/files.hpp"
+#include "tactile/util/text.hpp"
 
 namespace tactile::config {
+
+using util::one_line;
 
 Node::Node(YAML::Node node, std::string path, std::shared_ptr<const std::string> source)
     : node_(std::move(node)), path_(std::move(path)), source_(std::move(source)) {}
@@ -13,15 +16,31 @@ void Node::fail(const std::string& what) const {
   std::string where = *source_;
   const YAML::Mark m = node_.IsDefined() ? node_.Mark() : YAML::Mark::null_mark();
   if (m.line >= 0) where += ":" + std::to_string(m.line + 1);
-  if (path_.empty()) throw ConfigError(where + ": " + what);
-  throw ConfigError(where + ": key '" + path_ + "': " + what);
+  if (path_.empty()) throw ConfigError(one_line(where + ": " + what));
+  throw ConfigError(one_line(where + ": key '" + path_ + "': " + what));
 }
 
 std::string Node::text() const {
   if (!node_.IsDefined() || node_.IsNull()) return "<empty>";
   if (node_.IsMap()) return "<map>";
   if (node_.IsSequence()) return "<sequence>";
-  return "'" + node_.Scalar() + "'";
+  // Quoted on one line whatever the file holds: control characters and bytes beyond ASCII
+  // are escaped, and a long value is cut.
+  std::string out = "'";
+  const std::string& v = node_.Scalar();
+  for (std::size_t i = 0; i < v.size() && i < 80; ++i) {
+    const auto c = static_cast<unsigned char>(v[i]);
+    if (c >= 0x20 && c < 0x7f) {
+      out += static_cast<char>(c);
+    } else {
+      static const char* kHex = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    }
+  }
+  if (v.size() > 80) out += "...";
+  return out + "'";
 }
 
 std::optional<Node> Node::find(std::string_view key) const {
@@ -39,7 +58,7 @@ Node Node::operator[](std::string_view key) const {
     const std::string full = path_.empty() ? std::string(key) : path_ + "." + std::string(key);
     std::string where = *source_;
     if (node_.Mark().line >= 0) where += ":" + std::to_string(node_.Mark().line + 1);
-    throw ConfigError(where + ": key '" + full + "' is missing");
+    throw ConfigError(one_line(where + ": key '" + full + "' is missing"));
   }
   return *child;
 }
@@ -140,8 +159,8 @@ Node parse_yaml(const std::string& text, const std::string& source) {
   try {
     return Node(YAML::Load(text), "", src);
   } catch (const YAML::ParserException& e) {
-    throw ConfigError(source + ":" + std::to_string(e.mark.line + 1) +
-                      ": not valid YAML: " + e.msg);
+    throw ConfigError(
+        one_line(source + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg));
   }
 }
 
@@ -150,7 +169,7 @@ Node load_yaml_file(const std::filesystem::path& path) {
   try {
     text = util::read_file(path);
   } catch (const std::exception& e) {
-    throw ConfigError(e.what());
+    throw ConfigError(one_line(e.what()));
   }
   return parse_yaml(text, path.string());
 }

@@ -1,6 +1,48 @@
 #include "tactile/wire/envelope.hpp"
 
+#include <google/protobuf/stubs/logging.h>
+
+#include <atomic>
+#include <chrono>
+
+#include "tactile/util/log.hpp"
+#include "tactile/util/text.hpp"
+
 namespace tactile::wire {
+
+namespace {
+
+std::atomic<std::int64_t> g_last_log_ms{0};
+std::atomic<std::uint64_t> g_suppressed{0};
+
+void protobuf_log(google::protobuf::LogLevel level, const char* file, int line,
+                  const std::string& message) {
+  (void)file;
+  (void)line;
+  const std::int64_t now_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                  std::chrono::steady_clock::now().time_since_epoch())
+                                  .count();
+  std::int64_t last = g_last_log_ms.load();
+  if (now_ms - last < 1000 || !g_last_log_ms.compare_exchange_strong(last, now_ms)) {
+    ++g_suppressed;
+    return;
+  }
+  const std::uint64_t more = g_suppressed.exchange(0);
+  const std::string text = util::one_line(message);
+  if (level >= google::protobuf::LOGLEVEL_ERROR) {
+    util::log_error("protobuf: {}{}", text,
+                    more > 0 ? " (and " + std::to_string(more) + " more)" : "");
+  } else {
+    util::log_warn("protobuf: {}{}", text,
+                   more > 0 ? " (and " + std::to_string(more) + " more)" : "");
+  }
+}
+
+}  // namespace
+
+void install_protobuf_log_handler() {
+  google::protobuf::SetLogHandler(&protobuf_log);
+}
 
 const char* to_string(DecodeStatus s) {
   switch (s) {

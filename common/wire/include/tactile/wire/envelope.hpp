@@ -28,6 +28,11 @@ const char* to_string(DecodeStatus s);
 // Never throws.
 DecodeStatus decode(std::span<const std::uint8_t> bytes, v1::Envelope& out) noexcept;
 
+// Routes Protobuf's own log lines (one per non-UTF-8 string it parses, for instance) to the
+// program's log, at most one line a second with a count of the rest: a bad peer cannot flood
+// the log. Call once at start-up.
+void install_protobuf_log_handler();
+
 // Sets the schema version and serialises into `buffer` (its capacity is reused).
 void encode(v1::Envelope& envelope, std::string& buffer);
 
