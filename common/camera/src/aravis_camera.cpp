@@ -462,16 +462,25 @@ struct AravisCamera::Impl {
       slot->stamped = false;
     }
 
-    const FrameSequencer::Step step = sequencer.next(frame_id);
-    frame.sequence = step.sequence;
-    frame.frames_lost = step.frames_lost;
-    frame.first_after_start = step.first_after_start;
-    counted.frames_lost += step.frames_lost;
-    // A reordered frame (an incomplete one closed after a newer one) was counted lost when the
-    // newer one came: it did arrive after all.
-    if (step.late && !step.repeated && counted.frames_lost > 0) --counted.frames_lost;
-
     frame.status = check(buffer, frame);
+    if (frame_id == 0) {
+      // The frame's leader never arrived, so its block id is unknown (GigE Vision never uses
+      // 0): it cannot be placed in the stream, is never whole, and leaves the sequence alone;
+      // the next frame with an id counts it among those lost.
+      if (frame.status == FrameStatus::kComplete) frame.status = FrameStatus::kMissingPackets;
+      frame.image = ImageView{};
+      frame.sequence = 0;
+      frame.frames_lost = 0;
+    } else {
+      const FrameSequencer::Step step = sequencer.next(frame_id);
+      frame.sequence = step.sequence;
+      frame.frames_lost = step.frames_lost;
+      frame.first_after_start = step.first_after_start;
+      counted.frames_lost += step.frames_lost;
+      // A reordered frame (an incomplete one closed after a newer one) was counted lost when
+      // the newer one came: it did arrive after all.
+      if (step.late && !step.repeated && counted.frames_lost > 0) --counted.frames_lost;
+    }
     ++counted.frames;
     if (frame.status == FrameStatus::kComplete) {
       ++counted.completed;

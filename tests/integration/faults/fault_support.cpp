@@ -265,6 +265,18 @@ TruthReport check_against_truth(const std::vector<v1::TactileFrame>& frames,
       fail(where + ": sensor_node's sequence does not follow " +
            std::to_string(frames[i - 1].sequence()));
     }
+    if (f.camera_frame_id() == 0) {
+      // Its leader was lost: the id is unknown, it has no place in the stream and counts among
+      // the frames the next identified one skipped.
+      ++r.stale_id;
+      if (f.status() == v1::FRAME_STATUS_COMPLETE) fail(where + ": COMPLETE without a block id");
+      if (f.frames_skipped() != 0) fail(where + ": frames_skipped on a frame without a block id");
+      ++r.statuses[f.status()];
+      ++r.incomplete;
+      if (f.elements_size() != 0)
+        fail(fmt::format("{}: carries {} element readings", where, f.elements_size()));
+      continue;
+    }
     const camera::FrameSequencer::Step step = sequencer.next(f.camera_frame_id());
     sequences_seen.insert(step.sequence);
     if (step.late) {

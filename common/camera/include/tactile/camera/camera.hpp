@@ -56,7 +56,8 @@ struct Frame {
   // wait_frame(), stop() or the camera's destruction, whichever comes first.
   ImageView image;
   // The camera's own frame (GigE Vision block) id as delivered: 16-bit and wrapping on
-  // GigE Vision 1.x, where 0 is never used.
+  // GigE Vision 1.x, where 0 is never used. 0 here: the id is unknown (the frame's leader was
+  // lost); such a frame is never complete and has sequence 0 and frames_lost 0.
   std::uint64_t camera_frame_id = 0;
   // Unwrapped frame counter: +1 per frame the camera sent, lost ones included, so a step of k
   // between two received frames means k frame periods. Keeps counting across reopen(). An
