@@ -27,6 +27,7 @@ int run(int argc, char** argv) {
   std::string state_dir;
   std::string log_level = "info";
   double fps = 0;
+  bool raw_frames = false;
   CLI::App app{
       "sensor_node: the sensor PC of the tactile slippage control system. Grabs GigE Vision "
       "frames through Aravis from the cameras inside the optical three-axis tactile sensors, "
@@ -44,6 +45,9 @@ int run(int argc, char** argv) {
                  "default: the "
                  "configuration file's folder");
   app.add_option("--fps", fps, "one-camera case: frame rate (default 100 or the file's)");
+  app.add_flag("--raw-frames", raw_frames,
+               "also publish every measured camera frame and the reference on raw/<sensor_id> "
+               "(docs/recording.md)");
   app.add_option("--log-level", log_level, "debug, info, warn or error")->capture_default_str();
   try {
     app.parse(argc, argv);
@@ -86,6 +90,7 @@ int run(int argc, char** argv) {
       tactile::sensor::finish_camera_config(c);
     }
     if (!publish.empty()) cfg.publish = publish;
+    if (raw_frames) cfg.raw_frames = true;
     for (const auto& w : warnings)
       tactile::util::log_warn("{}", w);
 
@@ -97,7 +102,7 @@ int run(int argc, char** argv) {
     std::vector<std::unique_ptr<tactile::sensor::Pipeline>> pipelines;
     for (const CameraConfig& c : cfg.cameras) {
       pipelines.push_back(std::make_unique<tactile::sensor::Pipeline>(
-          c, cfg.measurement, cfg.stats_period_s,
+          c, cfg.measurement, cfg.stats_period_s, cfg.raw_frames,
           std::make_unique<tactile::camera::AravisCamera>(c.camera), pub));
     }
     std::atomic<bool> stop{false};

@@ -86,12 +86,13 @@ void HandNode::send_heartbeat(std::int64_t now_ns) {
 }
 
 void HandNode::on_topic_message() {
-  const auto status = wire::decode(msg_.payload, in_);
-  if (status != wire::DecodeStatus::kOk || !in_.has_tactile_frame()) {
+  const auto status = decoder_.decode(msg_.payload);
+  const v1::Envelope& in = decoder_.envelope();
+  if (status != wire::DecodeStatus::kOk || !in.has_tactile_frame()) {
     ++counters_.undecodable;
     return;
   }
-  const v1::TactileFrame& f = in_.tactile_frame();
+  const v1::TactileFrame& f = in.tactile_frame();
   int k = -1;
   for (std::size_t i = 0; i < control::kFingertips; ++i) {
     if (f.sensor_id() == ids_[i]) k = static_cast<int>(i);
@@ -123,17 +124,20 @@ void HandNode::on_topic_message() {
 }
 
 void HandNode::on_arm_message() {
-  if (wire::decode(arm_buf_, in_) != wire::DecodeStatus::kOk) {
+  if (decoder_.decode(arm_buf_) != wire::DecodeStatus::kOk) {
     ++counters_.undecodable;
     return;
   }
-  if (in_.has_arm_state()) {
-    if (wire::read_arm_state(in_.arm_state(), ids_, arm_state_) != wire::DecodeStatus::kOk) {
+  const v1::Envelope& in = decoder_.envelope();
+  if (in.has_arm_state()) {
+    if (wire::read_arm_state(in.arm_state(), ids_, arm_state_) != wire::DecodeStatus::kOk) {
       ++counters_.undecodable;
       return;
     }
     ++counters_.arm_states;
     have_arm_ = true;
+    // Beside the events, for recordings and plots (the arm link itself is point to point).
+    if (events_) events_->send("arm", arm_buf_);
     if (arm_state_.deadman && !deadman_seen_) {
       deadman_seen_ = true;
       // The arm held because it heard nothing from us for a while (we were not scheduled, or
@@ -150,7 +154,7 @@ void HandNode::on_arm_message() {
       util::log_info("arm controller heard again");
       arm_silent_reported_ = false;
     }
-  } else if (in_.has_heartbeat()) {
+  } else if (in.has_heartbeat()) {
     last_arm_ns_ = util::monotonic_ns();
   } else {
     ++counters_.undecodable;

@@ -58,7 +58,7 @@ class HandNode {
   // Reused buffers: the per-frame path allocates nothing once they have grown.
   wire::TopicMessage msg_;
   std::vector<std::uint8_t> arm_buf_;
-  v1::Envelope in_;
+  wire::EnvelopeDecoder decoder_;
   v1::Envelope out_;
   v1::Envelope event_env_;
   std::string out_bytes_;

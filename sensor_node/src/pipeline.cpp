@@ -8,6 +8,7 @@
 #include "tactile/util/log.hpp"
 #include "tactile/util/pgm.hpp"
 #include "tactile/wire/envelope.hpp"
+#include "tactile/wire/raw_frame.hpp"
 
 namespace tactile::sensor {
 namespace {
@@ -37,12 +38,14 @@ std::pair<double, double> IntervalTimes::take() noexcept {
 }
 
 Pipeline::Pipeline(CameraConfig cfg, const ExtractorOptions& measurement, double stats_period_s,
-                   std::unique_ptr<camera::Camera> cam, SharedPublisher& pub)
+                   bool raw_frames, std::unique_ptr<camera::Camera> cam, SharedPublisher& pub)
     : cfg_(std::move(cfg)),
       extractor_(cfg_.calibration, measurement),
       cam_(std::move(cam)),
       pub_(pub),
       stats_period_s_(stats_period_s),
+      raw_frames_(raw_frames),
+      raw_topic_(std::string(wire::kRawTopicPrefix) + cfg_.sensor_id),
       topic_("frame/" + cfg_.sensor_id),
       stats_topic_("stats/" + cfg_.sensor_id) {}
 
@@ -103,6 +106,8 @@ bool Pipeline::load_reference() {
                              " (element " + std::to_string(done.element_id) + ")");
   }
   util::log_info("{}: reference loaded from {}", cfg_.sensor_id, file.string());
+  forgot_pending_ = true;
+  publish_reference();
   return true;
 }
 
@@ -129,6 +134,43 @@ void Pipeline::publish(const camera::Frame& frame, v1::FrameStatus status, doubl
   }
 }
 
+void Pipeline::reference_in_use() {
+  // The captured mean has sub-gray-level precision no image file carries: use exactly the
+  // rounded image that is saved and published instead.
+  const Image rounded = extractor_.reference_image();
+  extractor_.begin_reference();
+  const ReferenceResult r = extractor_.add_reference_frame(rounded.view());
+  if (r.status == ReferenceStatus::kCollecting) extractor_.finish_reference();
+  publish_reference();
+}
+
+void Pipeline::publish_reference() {
+  if (!raw_frames_ || !extractor_.has_reference()) return;
+  raw_.Clear();
+  raw_.set_sensor_id(cfg_.sensor_id);
+  raw_.set_kind(v1::RAW_FRAME_KIND_REFERENCE);
+  wire::fill_raw_pixels(extractor_.reference_image().view(), raw_);
+  wire::fill_settings(extractor_.options(), *raw_.mutable_settings());
+  raw_.SerializeToString(&raw_bytes_);
+  pub_.send(raw_topic_, bytes_of(raw_bytes_));
+}
+
+void Pipeline::publish_raw(const camera::Frame& frame, std::uint64_t tactile_sequence,
+                           bool forgot) {
+  raw_.clear_settings();
+  raw_.set_sensor_id(cfg_.sensor_id);
+  raw_.set_kind(v1::RAW_FRAME_KIND_MEASURED);
+  raw_.set_tactile_sequence(tactile_sequence);
+  raw_.set_sequence(frame.sequence);
+  raw_.set_camera_frame_id(frame.camera_frame_id);
+  raw_.set_camera_timestamp_ns(frame.camera_timestamp_ns);
+  raw_.set_receive_timestamp_ns(frame.receive_timestamp_ns);
+  raw_.set_forget_previous(forgot);
+  wire::fill_raw_pixels(frame.image, raw_);
+  raw_.SerializeToString(&raw_bytes_);
+  pub_.send(raw_topic_, bytes_of(raw_bytes_));
+}
+
 void Pipeline::publish_stats() {
   const camera::CameraCounters c = cam_->counters();
   v1::SensorStats& s = *stats_env_.mutable_sensor_stats();
@@ -148,6 +190,7 @@ void Pipeline::publish_stats() {
   s.set_camera_restarts(counters_.camera_restarts);
   wire::encode(stats_env_, bytes_);
   pub_.send(stats_topic_, bytes_of(bytes_));
+  publish_reference();  // again now and then: a recorder that joins late still gets it
   util::log_debug(
       "{}: frames {} complete {} incomplete {} lost {} underruns {}; measure p50 {:.1f} us max "
       "{:.1f} us",
@@ -179,10 +222,14 @@ void Pipeline::run(const std::atomic<bool>& stop) noexcept {
         util::log_warn("{}: no frame for {:.2f} s ({}): reopening the camera", cfg_.sensor_id,
                        cfg_.frame_timeout_s, camera::to_string(frame.status));
         extractor_.forget_previous();
+        forgot_pending_ = true;
         if (!connect(stop, false)) break;
         continue;
       }
-      if (frame.first_after_start) extractor_.forget_previous();
+      if (frame.first_after_start) {
+        extractor_.forget_previous();
+        forgot_pending_ = true;
+      }
       if (frame.status != camera::FrameStatus::kComplete) {
         ++counters_.not_measured;
         publish(frame, to_wire(frame.status), 0);
@@ -193,6 +240,8 @@ void Pipeline::run(const std::atomic<bool>& stop) noexcept {
         if (r.status == ReferenceStatus::kComplete) {
           capturing_reference_ = false;
           util::log_info("{}: reference captured from {} frames", cfg_.sensor_id, r.frames);
+          reference_in_use();
+          forgot_pending_ = true;
           if (!cfg_.reference_cache.empty()) {
             util::write_pgm(cfg_.reference_cache, extractor_.reference_image().view());
             util::log_info("{}: reference saved to {}", cfg_.sensor_id,
@@ -214,6 +263,8 @@ void Pipeline::run(const std::atomic<bool>& stop) noexcept {
       if (ms == MeasureStatus::kOk) {
         ++counters_.complete;
         publish(frame, v1::FRAME_STATUS_COMPLETE, us);
+        if (raw_frames_) publish_raw(frame, sequence_ - 1, forgot_pending_);
+        forgot_pending_ = false;
       } else {
         ++counters_.not_measured;
         publish(frame, v1::FRAME_STATUS_WRONG_FORMAT, us);

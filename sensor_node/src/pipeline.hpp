@@ -11,6 +11,7 @@
 #include "sensor_config.hpp"
 #include "tactile/camera/camera.hpp"
 #include "tactile/extractor.hpp"
+#include "tactile/v1/log.pb.h"
 #include "tactile/v1/tactile.pb.h"
 #include "tactile/wire/sockets.hpp"
 #include "tactile/wire/tactile_frame.hpp"
@@ -61,7 +62,7 @@ struct PipelineCounters {
 class Pipeline {
  public:
   Pipeline(CameraConfig cfg, const ExtractorOptions& measurement, double stats_period_s,
-           std::unique_ptr<camera::Camera> cam, SharedPublisher& pub);
+           bool raw_frames, std::unique_ptr<camera::Camera> cam, SharedPublisher& pub);
   // Runs until `stop` is set: opens the camera (retrying with backoff), takes or loads the
   // reference, then measures and publishes every frame. Never throws.
   void run(const std::atomic<bool>& stop) noexcept;
@@ -74,6 +75,11 @@ class Pipeline {
   bool load_reference();
   void publish(const camera::Frame& frame, v1::FrameStatus status, double measure_us);
   void publish_stats();
+  // The reference in use becomes exactly the rounded image it is saved as (so a restart, a
+  // recording and a replay all measure with the same one); then it is announced.
+  void reference_in_use();
+  void publish_reference();
+  void publish_raw(const camera::Frame& frame, std::uint64_t tactile_sequence, bool forgot);
   void wait(double seconds, const std::atomic<bool>& stop) const;
 
   CameraConfig cfg_;
@@ -81,7 +87,14 @@ class Pipeline {
   std::unique_ptr<camera::Camera> cam_;
   SharedPublisher& pub_;
   double stats_period_s_;
+  bool raw_frames_ = false;
+  v1::RawFrame raw_;  // reused: its pixel buffer keeps its capacity
+  std::string raw_bytes_;
+  std::string raw_topic_;
   bool capturing_reference_ = false;
+  // The core was told to forget the previous frame since the last measured one (a replay must
+  // do the same: docs/recording.md).
+  bool forgot_pending_ = true;
 
   v1::Envelope env_;
   v1::Envelope stats_env_;  // its own: switching one envelope's body would free the frame's

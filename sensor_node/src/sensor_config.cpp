@@ -39,7 +39,8 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
     for (const auto& k : n.unknown_keys(known))
       warnings->push_back(path.string() + ": unknown key '" + k + "' ignored");
   };
-  warn(root, {"format", "publish", "stats_period_s", "measurement", "cameras", "security"});
+  warn(root,
+       {"format", "publish", "stats_period_s", "raw_frames", "measurement", "cameras", "security"});
   const config::Node format = root["format"];
   if (format.as_string() != kSensorConfigFormat) {
     format.fail(std::string("must be '") + kSensorConfigFormat + "', is " + format.text());
@@ -47,6 +48,7 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
   SensorConfig cfg = default_sensor_config();
   cfg.publish = root.get("publish", cfg.publish);
   cfg.stats_period_s = positive(root, "stats_period_s", cfg.stats_period_s);
+  cfg.raw_frames = root.get("raw_frames", cfg.raw_frames);
   if (auto m = root.find("measurement")) {
     warn(*m, {"estimator", "reference_frames", "reference_spot_check", "max_gap_frames"});
     if (auto e = m->find("estimator")) {

@@ -30,6 +30,10 @@ struct CameraConfig {
 struct SensorConfig {
   std::string publish = "tcp://*:5555";
   double stats_period_s = 1.0;
+  // Publish every measured camera frame and the reference in use on topic raw/<sensor_id>
+  // (docs/recording.md), so a recorded run can be measured again bit for bit. Large: off by
+  // default.
+  bool raw_frames = false;
   ExtractorOptions measurement;
   std::vector<CameraConfig> cameras;
   // CURVE on the PUB socket (docs/security.md); unset: plain TCP.

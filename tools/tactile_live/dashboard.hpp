@@ -16,8 +16,8 @@
 #include "tactile/control/config.hpp"
 #include "tactile/control/flag_analyzer.hpp"
 #include "tactile/reading.hpp"
-#include "tactile/recording/envelope_decoder.hpp"
 #include "tactile/v1/tactile.pb.h"
+#include "tactile/wire/envelope.hpp"
 
 namespace tactile::live {
 
@@ -113,7 +113,7 @@ class LiveModel {
   ModelOptions options_;
   control::FlagAnalyzer flags_;
   LiveState state_;
-  recording::EnvelopeDecoder decoder_;
+  wire::EnvelopeDecoder decoder_;
   std::vector<ElementReading> readings_;
   // Messages counted over windows of about a second; the rate is that of the last whole window.
   struct Counter {

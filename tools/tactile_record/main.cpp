@@ -11,14 +11,13 @@
 #include <string_view>
 #include <vector>
 
-#include "tactile/recording/envelope_decoder.hpp"
 #include "tactile/recording/log_writer.hpp"
-#include "tactile/recording/raw_frame.hpp"
 #include "tactile/recording/sources.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
 #include "tactile/wire/envelope.hpp"
+#include "tactile/wire/raw_frame.hpp"
 
 namespace {
 
@@ -95,7 +94,7 @@ class TopicCounts {
     return &entries_.back();
   }
   std::vector<Entry> entries_;
-  tactile::recording::EnvelopeDecoder decoder_;
+  tactile::wire::EnvelopeDecoder decoder_;
 };
 
 std::string default_output() {
@@ -118,7 +117,7 @@ int run(Options opt) {
   if (opt.duration_s < 0) throw std::invalid_argument("--duration must not be negative");
   if (!(opt.flush_interval_s > 0)) throw std::invalid_argument("--flush-interval must be positive");
   if (!(opt.progress_s >= 0)) throw std::invalid_argument("--progress must not be negative");
-  if (opt.raw_frames) opt.topics.emplace_back(tactile::recording::kRawTopicPrefix);
+  if (opt.raw_frames) opt.topics.emplace_back(tactile::wire::kRawTopicPrefix);
   if (opt.output.empty()) opt.output = default_output();
 
   tactile::recording::SourceOptions so;
@@ -180,7 +179,7 @@ int run(Options opt) {
         std::clamp<std::int64_t>((std::min(end, next_progress) - now) / 1000000, 1, 50));
     if (sources.receive(m, wait)) {
       const std::string_view topic(static_cast<const char*>(m.topic.data()), m.topic.size());
-      const auto kind = topic.starts_with(tactile::recording::kRawTopicPrefix)
+      const auto kind = topic.starts_with(tactile::wire::kRawTopicPrefix)
                             ? tactile::v1::PAYLOAD_KIND_RAW_FRAME
                             : tactile::v1::PAYLOAD_KIND_ENVELOPE;
       const WriteStatus s =

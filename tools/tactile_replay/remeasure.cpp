@@ -5,8 +5,8 @@
 #include <bit>
 #include <stdexcept>
 
-#include "tactile/recording/raw_frame.hpp"
 #include "tactile/wire/envelope.hpp"
+#include "tactile/wire/raw_frame.hpp"
 #include "tactile/wire/tactile_frame.hpp"
 
 namespace tactile::replay {
@@ -176,7 +176,7 @@ void Remeasurer::on_raw(const v1::RawFrame& raw) {
     if (!s->extractor || settings != s->settings) {
       ExtractorOptions o;
       try {
-        o = recording::to_options(raw.settings());
+        o = wire::to_options(raw.settings());
       } catch (const std::exception& e) {
         r.problem = e.what();
         return;
@@ -192,7 +192,7 @@ void Remeasurer::on_raw(const v1::RawFrame& raw) {
       s->reference.clear();
     }
     if (raw.pixels() == s->reference) return;  // the same reference again
-    if (!recording::raw_view(raw, s->scratch, view, why)) {
+    if (!wire::raw_view(raw, s->scratch, view, why)) {
       r.problem = "a recorded reference is not an image: " + why;
       return;
     }
@@ -214,7 +214,7 @@ void Remeasurer::on_raw(const v1::RawFrame& raw) {
     ++r.no_reference;
     return;
   }
-  if (!recording::raw_view(raw, s->scratch, view, why)) {
+  if (!wire::raw_view(raw, s->scratch, view, why)) {
     r.problem = "a recorded raw frame is not an image: " + why;
     return;
   }

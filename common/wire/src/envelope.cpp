@@ -75,6 +75,28 @@ DecodeStatus decode(std::span<const std::uint8_t> bytes, v1::Envelope& out) noex
   return DecodeStatus::kOk;
 }
 
+namespace {
+
+google::protobuf::ArenaOptions arena_options(std::vector<char>& block) {
+  google::protobuf::ArenaOptions o;
+  o.initial_block = block.data();
+  o.initial_block_size = block.size();
+  return o;
+}
+
+}  // namespace
+
+EnvelopeDecoder::EnvelopeDecoder(std::size_t block_bytes)
+    : block_(block_bytes), arena_(arena_options(block_)) {
+  envelope_ = google::protobuf::Arena::CreateMessage<v1::Envelope>(&arena_);
+}
+
+DecodeStatus EnvelopeDecoder::decode(std::span<const std::uint8_t> bytes) noexcept {
+  arena_.Reset();
+  envelope_ = google::protobuf::Arena::CreateMessage<v1::Envelope>(&arena_);
+  return wire::decode(bytes, *envelope_);
+}
+
 void encode(v1::Envelope& envelope, std::string& buffer) {
   envelope.set_schema_version(kSchemaVersion);
   buffer.clear();

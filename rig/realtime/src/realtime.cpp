@@ -148,7 +148,7 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
   bool have_peer = false;
   std::vector<std::uint8_t> payload;
   wire::TopicMessage msg;
-  v1::Envelope env;
+  wire::EnvelopeDecoder decoder;
   v1::Envelope truth_env;
   v1::Envelope state_env;
   std::string out;
@@ -189,7 +189,8 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
   };
 
   const auto on_arm_message = [&](std::int64_t now_ns) {
-    const auto st = wire::decode(payload, env);
+    const auto st = decoder.decode(payload);
+    const v1::Envelope& env = decoder.envelope();
     if (st != wire::DecodeStatus::kOk) {
       ++c.invalid_commands;
       return;
@@ -218,8 +219,9 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
   };
 
   const auto on_frame = [&]() {
-    if (wire::decode(msg.payload, env) != wire::DecodeStatus::kOk || !env.has_tactile_frame())
-      return;
+    if (decoder.decode(msg.payload) != wire::DecodeStatus::kOk) return;
+    const v1::Envelope& env = decoder.envelope();
+    if (!env.has_tactile_frame()) return;
     const v1::TactileFrame& f = env.tactile_frame();
     const std::size_t tip = f.sensor_id() == "left"    ? 0
                             : f.sensor_id() == "right" ? 1
@@ -246,7 +248,9 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
   };
 
   const auto on_event = [&]() {
-    if (wire::decode(msg.payload, env) != wire::DecodeStatus::kOk || !env.has_event()) return;
+    if (decoder.decode(msg.payload) != wire::DecodeStatus::kOk) return;
+    const v1::Envelope& env = decoder.envelope();
+    if (!env.has_event()) return;
     const v1::Event& e = env.event();
     ++c.events;
     const auto p = wire::phase_from_string(e.phase());

@@ -20,9 +20,9 @@
 #include "synthetic.hpp"
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/extractor.hpp"
-#include "tactile/recording/raw_frame.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/wire/envelope.hpp"
+#include "tactile/wire/raw_frame.hpp"
 #include "tactile/wire/tactile_frame.hpp"
 
 namespace {
@@ -96,13 +96,13 @@ int run(const Options& opt) {
   std::string raw_buf;
   std::uint64_t sent = 0;
   const std::string topic = "frame/" + cal.sensor_id;
-  const std::string raw_topic = std::string(recording::kRawTopicPrefix) + cal.sensor_id;
+  const std::string raw_topic = std::string(wire::kRawTopicPrefix) + cal.sensor_id;
   auto send_reference = [&] {
     raw.Clear();
     raw.set_sensor_id(cal.sensor_id);
     raw.set_kind(v1::RAW_FRAME_KIND_REFERENCE);
-    recording::fill_raw_pixels(reference.view(), raw);
-    recording::fill_settings(xo, *raw.mutable_settings());
+    wire::fill_raw_pixels(reference.view(), raw);
+    wire::fill_settings(xo, *raw.mutable_settings());
     raw.SerializeToString(&raw_buf);
     frames.send(raw_topic, bytes(raw_buf));
     ++sent;
@@ -156,7 +156,7 @@ int run(const Options& opt) {
       raw.set_camera_timestamp_ns(h.camera_timestamp_ns);
       raw.set_receive_timestamp_ns(h.receive_timestamp_ns);
       raw.set_forget_previous(restart);
-      recording::fill_raw_pixels(img.view(), raw);
+      wire::fill_raw_pixels(img.view(), raw);
       raw.SerializeToString(&raw_buf);
       frames.send(raw_topic, bytes(raw_buf));
       ++sent;

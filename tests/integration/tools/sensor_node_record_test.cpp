@@ -4,9 +4,13 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <regex>
+#include <thread>
+
 #include "process.hpp"
 #include "support/child_process.hpp"
 #include "synthetic.hpp"
+#include "tactile/camera/fake_gv_camera.hpp"
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/util/pgm.hpp"
 #include "tactile/wire/envelope.hpp"
@@ -93,6 +97,74 @@ TEST(SensorNodeRecording, RecordsReplaysAndPlotsARealSensorNode) {
 
   node.signal(SIGTERM);
   EXPECT_EQ(node.wait(10s).exit_code, 0);
+}
+
+// The real sensor_node, publishing its raw frames, captures its own reference from a camera that
+// shows a sensor at rest, then measures spots; a recording of that run, measured again by
+// tactile_replay --remeasure, gives every TactileFrame bit for bit (issue 8's done-when).
+TEST(SensorNodeRecording, ARecordedRunIsMeasuredAgainBitForBit) {
+  TempDir dir;
+  testing::SceneOptions o;
+  o.width = 320;
+  o.height = 240;
+  Calibration cal = testing::grid_calibration(o, 5, 3, 50, 14);
+  cal.sensor_id = "left";
+  config::save_calibration(dir / "left.yaml", cal);
+  const std::string endpoint = "ipc://" + (dir / "frames").string();
+
+  camera::FakeGvCameraOptions fo;
+  fo.address = "127.0.0.2";
+  fo.width = o.width;
+  fo.height = o.height;
+  camera::FakeGvCamera cam(fo);
+  testing::SceneRenderer scene(o, &cal);
+  util::Random rng(5);
+  Image img;
+  std::uint64_t published = 0;
+  const auto show = [&](bool pressed) {
+    std::vector<testing::Spot> spots;
+    if (pressed) {
+      for (std::size_t e = 0; e < cal.elements.size(); e += 2) {
+        spots.push_back(
+            {cal.elements[e].center_px + Vec2{0.3 * static_cast<double>(published % 7), -0.2}, 90,
+             2.2});
+      }
+    }
+    scene.render(spots, rng, img);
+    ASSERT_TRUE(
+        cam.publish(img.view(), published, static_cast<std::int64_t>(published) * 10'000'000));
+    ++published;
+  };
+  show(false);
+  Process node({TACTILE_SENSOR_NODE_PATH, "--camera", "127.0.0.2", "--calibration",
+                (dir / "left.yaml").string(), "--publish", endpoint, "--fps", "100",
+                "--raw-frames"});
+  Process rec({TACTILE_RECORD_PATH, "-o", (dir / "run.tlog").string(), endpoint, "--raw-frames",
+               "--count", "400"});
+  // At rest until the reference is captured, then pressed, a new image every frame period.
+  const auto deadline = std::chrono::steady_clock::now() + 40s;
+  bool captured = false;
+  while (rec.running() && std::chrono::steady_clock::now() < deadline) {
+    captured = captured || node.err_so_far().find("reference captured") != std::string::npos;
+    show(captured);
+    std::this_thread::sleep_for(10ms);  // one camera frame period: paces the images shown
+  }
+  const auto r = rec.wait(20s);
+  ASSERT_EQ(r.exit_code, 0) << r.err << node.err_so_far();
+  node.signal(SIGTERM);
+  EXPECT_EQ(node.wait(10s).exit_code, 0);
+
+  const auto check = testing::run({TACTILE_REPLAY_PATH, (dir / "run.tlog").string(), "--remeasure",
+                                   (dir / "left.yaml").string()},
+                                  60s);
+  EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(
+      check.out, m,
+      std::regex("([0-9]+) frames measured again, ([0-9]+) identical bit for bit, 0 differ")))
+      << check.out << check.err;
+  EXPECT_GT(std::stoi(m[1].str()), 50) << check.out;
+  EXPECT_EQ(m[1].str(), m[2].str());
 }
 
 }  // namespace

@@ -5,8 +5,8 @@
 #include <gtest/gtest.h>
 
 #include "synthetic.hpp"
-#include "tactile/recording/raw_frame.hpp"
 #include "tactile/wire/envelope.hpp"
+#include "tactile/wire/raw_frame.hpp"
 #include "tactile/wire/tactile_frame.hpp"
 
 namespace tactile::replay {
@@ -45,8 +45,8 @@ RecordedRun make_run(int n) {
   v1::RawFrame raw;
   raw.set_sensor_id("left");
   raw.set_kind(v1::RAW_FRAME_KIND_REFERENCE);
-  recording::fill_raw_pixels(img.view(), raw);
-  recording::fill_settings(xo, *raw.mutable_settings());
+  wire::fill_raw_pixels(img.view(), raw);
+  wire::fill_settings(xo, *raw.mutable_settings());
   run.reference = record("raw/left", v1::PAYLOAD_KIND_RAW_FRAME, raw.SerializeAsString());
   v1::Envelope env;
   std::string buf;
@@ -73,7 +73,7 @@ RecordedRun make_run(int n) {
     raw.set_tactile_sequence(h.sequence);
     raw.set_sequence(static_cast<std::uint64_t>(k));
     raw.set_camera_timestamp_ns(k * 10'000'000LL);
-    recording::fill_raw_pixels(img.view(), raw);
+    wire::fill_raw_pixels(img.view(), raw);
     run.raws.push_back(record("raw/left", v1::PAYLOAD_KIND_RAW_FRAME, raw.SerializeAsString()));
   }
   return run;

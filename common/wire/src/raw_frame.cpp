@@ -1,10 +1,10 @@
-#include "tactile/recording/raw_frame.hpp"
+#include "tactile/wire/raw_frame.hpp"
 
 #include <bit>
 #include <cstring>
 #include <stdexcept>
 
-namespace tactile::recording {
+namespace tactile::wire {
 
 void fill_raw_pixels(const ImageView& view, v1::RawFrame& out) {
   const std::size_t bpp = bytes_per_pixel(view.format);
@@ -85,4 +85,4 @@ ExtractorOptions to_options(const v1::MeasurementSettings& s) {
   return o;
 }
 
-}  // namespace tactile::recording
+}  // namespace tactile::wire

@@ -1,9 +1,9 @@
 // Raw frames: pixels and settings round-trip through tactile.v1.RawFrame unchanged.
-#include "tactile/recording/raw_frame.hpp"
+#include "tactile/wire/raw_frame.hpp"
 
 #include <gtest/gtest.h>
 
-namespace tactile::recording {
+namespace tactile::wire {
 namespace {
 
 TEST(RawFrame, PixelsRoundTripForBothDepthsAndPaddedRows) {
@@ -92,4 +92,4 @@ TEST(RawFrame, SettingsRoundTrip) {
 }
 
 }  // namespace
-}  // namespace tactile::recording
+}  // namespace tactile::wire

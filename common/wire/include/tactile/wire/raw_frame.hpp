@@ -10,7 +10,7 @@
 #include "tactile/image.hpp"
 #include "tactile/v1/log.pb.h"
 
-namespace tactile::recording {
+namespace tactile::wire {
 
 // Topic prefix of raw frames: "raw/<sensor_id>".
 inline constexpr const char* kRawTopicPrefix = "raw/";
@@ -29,4 +29,4 @@ void fill_settings(const ExtractorOptions& options, v1::MeasurementSettings& out
 // Throws std::invalid_argument naming the estimator when it is not one the core knows.
 ExtractorOptions to_options(const v1::MeasurementSettings& settings);
 
-}  // namespace tactile::recording
+}  // namespace tactile::wire
