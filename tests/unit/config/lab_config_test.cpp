@@ -71,7 +71,8 @@ TEST_F(LabConfig, EveryYamlLoadsWithTheLoaderOfItsFormatWithoutWarnings) {
     std::vector<std::string> warnings;
     if (format == "tactile-sensor/1") {
       const sensor::SensorConfig c = sensor::load_sensor_config(p, &warnings, etc_ / "state");
-      EXPECT_TRUE(c.security.has_value());
+      // Secured on the lab network; the bootstrap publishes on 127.0.0.1 only.
+      EXPECT_TRUE(c.security.has_value() || c.publish.starts_with("tcp://127.0.0.1:"));
       ASSERT_FALSE(c.cameras.empty());
       for (const sensor::CameraConfig& cam : c.cameras) {
         SCOPED_TRACE(cam.sensor_id);
@@ -87,7 +88,9 @@ TEST_F(LabConfig, EveryYamlLoadsWithTheLoaderOfItsFormatWithoutWarnings) {
       EXPECT_TRUE(c.arm_security.has_value());
     } else if (format == "tactile-calibration/1") {
       const Calibration c = config::load_calibration(p, &warnings);
-      EXPECT_EQ(c.elements.size(), 41u);
+      // The bootstrap calibration holds one element; a sensor's, the paper's 41.
+      const bool bootstrap = p.filename().string().starts_with("bootstrap");
+      EXPECT_EQ(c.elements.size(), bootstrap ? 1u : 41u);
     } else {
       ADD_FAILURE() << "no known format: '" << format << "'";
     }
