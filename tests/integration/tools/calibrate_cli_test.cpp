@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -193,6 +194,7 @@ TEST_F(CalibrateCli, RefusesABadFitNamingTheElementAndWritesNothing) {
   const std::string cal = (dir_ / "left.yaml").string();
   const auto f = fit(lay, bad, cal);
   EXPECT_EQ(f.exit_code, 1) << describe(f);
+  std::printf("refusal: %s", f.err.c_str());
   EXPECT_THAT(f.err, HasSubstr("tactile_calibrate: " + bad +
                                ": normal curve: the fit error is "
                                "too large: element 12 has RMS"));
