@@ -144,6 +144,15 @@ ReceiveReport receive_and_check(AravisCamera& camera, int count, std::uint32_t s
       ADD_FAILURE() << "no frame within 2 s; " << counters_text(camera.counters());
       break;
     }
+    if (f.camera_frame_id == 0) {
+      // Its leader was lost, so its block id is unknown: it has no place in the stream, is
+      // never whole, and the next identified frame counts it among those lost.
+      EXPECT_NE(f.status, FrameStatus::kComplete) << "a frame without a block id came whole";
+      EXPECT_EQ(f.frames_lost, 0U);
+      EXPECT_EQ(f.image.data, nullptr) << "a frame without a block id must not offer pixels";
+      ++report.incomplete;
+      continue;
+    }
     report.frame_ids.push_back(f.camera_frame_id);
     if (previous_sequence && f.sequence <= *previous_sequence) {
       // A late frame: only an incomplete one, whose packets were waited for longer.
