@@ -144,7 +144,8 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
                  truth_pub ? truth_pub->endpoint() : std::string("(none)"), opt.deadman_s * 1e3);
 
   // Reused buffers.
-  std::string peer;
+  std::string peer;  // the client the arm answers
+  std::string from;  // the sender of the message at hand
   bool have_peer = false;
   std::vector<std::uint8_t> payload;
   wire::TopicMessage msg;
@@ -188,6 +189,8 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
     }
   };
 
+  // The peer the arm answers: the first client that spoke (a heartbeat) or the last that sent a
+  // valid command. Garbage never changes it, and only its words keep the deadman from tripping.
   const auto on_arm_message = [&](std::int64_t now_ns) {
     const auto st = decoder.decode(payload);
     const v1::Envelope& env = decoder.envelope();
@@ -195,18 +198,36 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
       ++c.invalid_commands;
       return;
     }
+    if (env.has_heartbeat()) {
+      if (!have_peer) {
+        util::log_info("hand_node connected");
+      } else if (from != peer && deadman_tripped) {
+        // The old client fell silent and the arm is held: a new one (a restarted hand_node)
+        // takes over.
+        util::log_info("a new client takes over after the deadman hold");
+      } else if (from != peer) {
+        ++c.invalid_commands;  // another client's heartbeat while ours is alive: refused
+        return;
+      }
+      peer = from;
+      have_peer = true;
+      last_heard_ns = now_ns;
+      return;
+    }
+    if (!env.has_arm_command() ||
+        wire::read_arm_command(env.arm_command(), wire_ids, cmd) != wire::DecodeStatus::kOk) {
+      ++c.invalid_commands;
+      return;
+    }
     if (!have_peer) util::log_info("hand_node connected");
+    if (have_peer && from != peer) util::log_warn("commands now come from another client");
+    peer = from;
     have_peer = true;
     last_heard_ns = now_ns;
-    if (!env.has_arm_command()) return;
     // The deadman hold lasts until hand_node commands again (its ArmStates carry the fault).
     if (deadman_tripped) {
       util::log_info("hand_node commands again after the deadman hold");
       deadman_tripped = false;
-    }
-    if (wire::read_arm_command(env.arm_command(), wire_ids, cmd) != wire::DecodeStatus::kOk) {
-      ++c.invalid_commands;
-      return;
     }
     ++c.commands;
     last_command = cmd.sequence;
@@ -281,7 +302,7 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
         wire::poll_readable(sockets,
                             milliseconds(std::min<std::int64_t>(wait_ns / 1000000 + 1, 5)));
       now = util::realtime_ns();
-      while (arm.receive(peer, payload, milliseconds(0)))
+      while (arm.receive(from, payload, milliseconds(0)))
         on_arm_message(util::realtime_ns());
       while (frames.receive(msg, milliseconds(0)))
         on_frame();
