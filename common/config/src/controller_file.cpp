@@ -51,6 +51,7 @@ const DoubleField kDoubles[] = {
     {"open_speed_mps", &Config::open_speed_mps},
     {"open_distance_m", &Config::open_distance_m},
     {"open_settle_s", &Config::open_settle_s},
+    {"resume_settle_s", &Config::resume_settle_s},
     {"twist_angle_rad", &Config::twist_angle_rad},
     {"search_timeout_s", &Config::search_timeout_s},
     {"segment_timeout_s", &Config::segment_timeout_s},

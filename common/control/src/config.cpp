@@ -115,6 +115,7 @@ void Config::validate() const {
   positive("open_speed_mps", open_speed_mps);
   positive("open_distance_m", open_distance_m);
   non_negative("open_settle_s", open_settle_s);
+  non_negative("resume_settle_s", resume_settle_s);
 
   positive("twist_angle_rad", twist_angle_rad);
   if (twist_angle_rad > 2.0 * std::numbers::pi) {

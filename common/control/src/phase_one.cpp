@@ -121,6 +121,7 @@ void PhaseOneSequencer::start(const StepInput& in, SegmentIds& ids, StepOutput& 
   finished_ = false;
   grasp_classified_ = false;
   released_on_lift_ = false;
+  settled_after_s_ = 0;
   enter(Phase::kApproach, in, ids, out);
   out.finger_mode = FingerMode::kOff;
 }
@@ -162,7 +163,7 @@ void PhaseOneSequencer::step(const StepInput& in, SegmentIds& ids, StepOutput& o
       break;
 
     case Phase::kLift: {
-      if (!grasp_classified_) {
+      if (!grasp_classified_ && t >= settled_after_s_) {
         const SlipDirection d = analyze_slip_direction(in.fingertips, in.flags, cfg_.gravity_axis,
                                                        cfg_.direction_deadband_mm);
         if (d.classification == SlipClass::kGrasp) {
@@ -188,8 +189,10 @@ void PhaseOneSequencer::step(const StepInput& in, SegmentIds& ids, StepOutput& o
     case Phase::kLower: {
       // Positive slips here (deceleration, vibration) are the estimator's: re-compression. The
       // first negative one is the cap meeting the bottle or the ground.
-      const SlipDirection d = analyze_slip_direction(in.fingertips, in.flags, cfg_.gravity_axis,
-                                                     cfg_.direction_deadband_mm);
+      const SlipDirection d =
+          t >= settled_after_s_ ? analyze_slip_direction(in.fingertips, in.flags, cfg_.gravity_axis,
+                                                         cfg_.direction_deadband_mm)
+                                : SlipDirection{};
       if (d.classification == SlipClass::kRelease) {
         out.events.push(classified(EventKind::kReleaseClassified, phase_, d));
         enter(Phase::kRelease, in, ids, out);
@@ -246,12 +249,13 @@ void PhaseOneSequencer::step(const StepInput& in, SegmentIds& ids, StepOutput& o
 
 Command PhaseOneSequencer::resume(SegmentIds& ids, double t) noexcept {
   if (phase_ == Phase::kRelease && sub_ == Sub::kOpening) {
-    sub_started_s_ = t;
-    return Command::open_fingers({cfg_.open_speed_mps, cfg_.open_distance_m});
+    // The open's timer goes on from where the hold stopped it.
+    return resume_open(cfg_, t - sub_started_s_);
   }
   if (segment_.active && !finished_) {
     // The hold interrupted the segment: run it again under a new id, so that a done flag of the
     // old one cannot be mistaken for the new one's.
+    settled_after_s_ = t + cfg_.resume_settle_s;
     segment_.move.segment_id = ids.take();
     return Command::move(segment_.move);
   }

@@ -238,8 +238,8 @@ void PhaseTwoSequencer::step(const StepInput& in, SegmentIds& ids, StepOutput& o
 
 Command PhaseTwoSequencer::resume(SegmentIds& ids, double t) noexcept {
   if (sub_ == Sub::kOpening) {
-    sub_started_s_ = t;
-    return Command::open_fingers({cfg_.open_speed_mps, cfg_.open_distance_m});
+    // The open's timer goes on from where the hold stopped it.
+    return resume_open(cfg_, t - sub_started_s_);
   }
   if (segment_.active && !finished_) {
     segment_.move.segment_id = ids.take();

@@ -277,6 +277,59 @@ TEST(PhaseOne, OnlyTheFirstClassifiedSlipOnLiftCounts) {
   EXPECT_EQ(testing::segment_names(t).size(), 6U);
 }
 
+// A stale hold stops the lift and the resume starts it again under the cap: the slips that
+// follow are the cap's inertia, not a support from below. For resume_settle_s they are answered
+// (re-compression) but not classified; afterwards classification works again.
+TEST(PhaseOne, SlipsRightAfterAStaleHoldOnLiftAreNotClassified) {
+  const Config cfg = phase_one_config();
+  ASSERT_DOUBLE_EQ(cfg.resume_settle_s, 0.3);  // 30 frames of the scripted rig
+  GraspMoveTwistController ctl(cfg);
+  int lift_frames = 0;
+  ScriptedRig rig({}, [&lift_frames](ScriptedRig& r) {
+    if (r.segment() == "MOVE3") ++lift_frames;
+    r.set_stale(1, lift_frames >= 10 && lift_frames < 20);
+    if (lift_frames == 22) r.slip(0, 0, 0.0, -0.012);  // the stop and start, against gravity
+    if (lift_frames == 55) r.slip(0, 0, 0.0, 0.012);   // the weight, once settled
+    bottle_on_lowering(r);
+  });
+  const testing::Trace t = testing::run(ctl, rig);
+  const std::vector<std::string> expected{"PHASE APPROACH",
+                                          "PHASE DESCEND",
+                                          "PHASE GRASP",
+                                          "TOUCH",
+                                          "GRASPING_ENDED",
+                                          "PHASE LIFT",
+                                          "STALE_HOLD tip1",
+                                          "RESUMED",
+                                          "RECOMPRESS tip0",
+                                          "GRASP_CLASSIFIED tip0",
+                                          "RECOMPRESS tip0",
+                                          "PHASE TRANSPORT",
+                                          "PHASE LOWER",
+                                          "RELEASE_CLASSIFIED tip0",
+                                          "PHASE RELEASE",
+                                          "PHASE RETRACT",
+                                          "DONE"};
+  EXPECT_EQ(describe(t.events), expected);
+  EXPECT_EQ(ctl.phase(), Phase::kDone);
+}
+
+TEST(PhaseOne, AfterTheResumeSettlesANegativeSlipOnLiftStillReleases) {
+  GraspMoveTwistController ctl(phase_one_config());
+  int lift_frames = 0;
+  ScriptedRig rig({}, [&lift_frames](ScriptedRig& r) {
+    if (r.segment() == "MOVE3") ++lift_frames;
+    r.set_stale(1, lift_frames >= 10 && lift_frames < 20);
+    if (lift_frames == 55) r.slip(1, 0, 0.0, -0.01);
+  });
+  const testing::Trace t = testing::run(ctl, rig);
+  const std::vector<std::string> expected{"PHASE APPROACH",  "PHASE DESCEND",  "PHASE GRASP",
+                                          "TOUCH",           "GRASPING_ENDED", "PHASE LIFT",
+                                          "STALE_HOLD tip1", "RESUMED",        "PHASE RELEASE",
+                                          "PHASE RETRACT",   "ABORTED"};
+  EXPECT_EQ(describe(t.events), expected);
+}
+
 TEST(PhaseOne, SearchTimesOutWhenNothingIsThere) {
   Config cfg = phase_one_config();
   cfg.search_timeout_s = 0.5;

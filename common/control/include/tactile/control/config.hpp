@@ -69,6 +69,10 @@ struct Config {
   double open_speed_mps = 0.005;  // the gentle release
   double open_distance_m = 0.004;
   double open_settle_s = 0.05;  // after the open's nominal duration
+  // After a stale hold, the arm stopped and started again under the object: the slips that
+  // follow are the object's inertia, not its support. The lift's grasp/release and the
+  // lowering's release are not classified for this long after the segment resumes.
+  double resume_settle_s = 0.3;
 
   // --- Phase II (paper Fig. 8) -------------------------------------------------------------
   double twist_angle_rad = std::numbers::pi / 2.0;  // wrist turn per cycle (90 degrees)

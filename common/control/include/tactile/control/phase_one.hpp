@@ -51,6 +51,7 @@ class PhaseOneSequencer {
   Phase phase_ = Phase::kIdle;
   Sub sub_ = Sub::kNone;
   double sub_started_s_ = 0;
+  double settled_after_s_ = 0;  // no slip direction is classified before this (resume_settle_s)
   ActiveSegment segment_;
   std::array<bool, kFingertips> touched_{};
   bool grasp_classified_ = false;
