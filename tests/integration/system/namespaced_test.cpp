@@ -104,13 +104,15 @@ TEST(NamespacedSystem, RunsTheComposeTopologyWithDockersConfiguration) {
   Process sensor(net.in("sen", {TACTILE_SENSOR_NODE_PATH, "--config", config + "/sensor_node.yaml",
                                 "--state-dir", out.path().string()}));
   Process hand(net.in("hand", {TACTILE_HAND_NODE_PATH, "--config", config + "/hand_node.yaml"}));
-  const auto h = hand.wait(180s);
-  const auto r = rig.wait(60s);
+  // The rig ends the scenario; hand_node ends its task just before (after a drop it would hold
+  // for ever on stale data, and is given 20 s).
+  const auto r = rig.wait(180s);
+  const auto h = hand.wait(20s);
   sensor.signal(SIGINT);
   const auto s = sensor.wait(20s);
   const std::string logs =
       "\n--- hand\n" + h.err + "\n--- sensor\n" + s.err + "\n--- rig\n" + r.err;
-  ASSERT_FALSE(h.timed_out) << logs;
+  EXPECT_FALSE(h.timed_out) << logs;
   EXPECT_EQ(h.exit_code, 0) << logs;
   EXPECT_EQ(r.exit_code, 0) << logs;
   EXPECT_EQ(s.exit_code, 0) << logs;
