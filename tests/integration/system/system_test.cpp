@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -187,6 +188,9 @@ TEST(ProcessFaults, SensorNodeKilledInTransportHoldsThenResumesFromItsSavedRefer
   ASSERT_TRUE(before && after);
   const double moved_mm = 1000 * std::hypot((*after)[0] - (*before)[0], (*after)[1] - (*before)[1]);
   EXPECT_LT(moved_mm, 1.0) << "the cap moved " << moved_mm << " mm while the data was stale";
+  std::fprintf(stderr,
+               "[measured] STALE_HOLD %.1f ms after the last frame; cap moved %.3f mm held\n",
+               waited_ms, moved_mm);
   // sensor_node comes back, loads the reference it saved instead of capturing one under load,
   // and the task carries on to the end.
   s.start_sensor();
@@ -248,6 +252,8 @@ TEST(ProcessFaults, ArmEndpointFloodedWithGarbageTheTaskGoesOnAndEveryMessageIsR
   EXPECT_GE(std::stoull(m[2].str()), kMessages - 10) << m[0];
   EXPECT_LE(std::stoull(m[2].str()), kMessages) << m[0];
   EXPECT_EQ(log.find("commands now come from another client"), std::string::npos) << log;
+  std::fprintf(stderr, "[measured] sent %llu, rig: %s\n", static_cast<unsigned long long>(sent),
+               m[0].str().c_str());
 }
 
 TEST(ProcessFaults, HandNodeKilledTheDeadmanHoldsTheArmWithin50ms) {
@@ -266,11 +272,15 @@ TEST(ProcessFaults, HandNodeKilledTheDeadmanHoldsTheArmWithin50ms) {
   }
   ASSERT_FALSE(m.empty()) << log;
   EXPECT_LE(std::stoi(m[1].str()), 50) << m[0];
+  std::fprintf(stderr, "[measured] %s\n", m[0].str().c_str());
   // And the arm stays held: the cap stops where it is.
   const auto before = s.cap_position(500ms);
   const auto after = s.cap_position(800ms);
   ASSERT_TRUE(before && after);
-  EXPECT_LT(1000 * std::hypot((*after)[0] - (*before)[0], (*after)[1] - (*before)[1]), 1.0);
+  const double held_moved_mm =
+      1000 * std::hypot((*after)[0] - (*before)[0], (*after)[1] - (*before)[1]);
+  EXPECT_LT(held_moved_mm, 1.0);
+  std::fprintf(stderr, "[measured] cap moved %.3f mm while the deadman held\n", held_moved_mm);
   s.rig().signal(SIGINT);
   const auto rig = s.rig().wait(30s);
   EXPECT_EQ(rig.exit_code, 0) << rig.err;
