@@ -71,9 +71,14 @@ void HandNode::send_command(const control::Command& c, std::int64_t now_ns) {
     case control::CommandKind::kNone:
       break;
   }
-  wire::fill_arm_command(c, ++command_sequence_, util::realtime_ns(), answers(), ids_,
-                         *out_.mutable_arm_command());
+  v1::ArmCommand& cmd = *out_.mutable_arm_command();
+  wire::fill_arm_command(c, ++command_sequence_, util::realtime_ns(), answers(), ids_, cmd);
+  // When each answered frame arrived here: splits latency into transport and control.
+  for (v1::FrameRef& r : *cmd.mutable_answers())
+    r.set_receive_timestamp_ns(r.sensor_id() == ids_[0] ? received_ns_[0] : received_ns_[1]);
   send_envelope();
+  // A copy beside the events, as for ArmStates (the arm link itself is point to point).
+  if (events_) events_->send("command", bytes(out_bytes_));
   ++counters_.commands;
 }
 
@@ -86,6 +91,7 @@ void HandNode::send_heartbeat(std::int64_t now_ns) {
 }
 
 void HandNode::on_topic_message() {
+  const std::int64_t received_ns = util::realtime_ns();
   const auto status = decoder_.decode(msg_.payload);
   const v1::Envelope& in = decoder_.envelope();
   if (status != wire::DecodeStatus::kOk || !in.has_tactile_frame()) {
@@ -118,6 +124,7 @@ void HandNode::on_topic_message() {
   }
   ++counters_.frames[ki];
   have_frame_[ki] = true;
+  received_ns_[ki] = received_ns;
   const std::int64_t now = util::monotonic_ns();
   last_whole_ns_[ki] = now;
   step(now, k);

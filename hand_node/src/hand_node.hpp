@@ -67,6 +67,7 @@ class HandNode {
 
   std::array<bool, control::kFingertips> have_frame_{};
   std::array<std::int64_t, control::kFingertips> last_whole_ns_{};
+  std::array<std::int64_t, control::kFingertips> received_ns_{};  // CLOCK_REALTIME
   wire::ArmStateData arm_state_;
   bool have_arm_ = false;
   std::int64_t last_arm_ns_ = 0;
