@@ -1,0 +1,1200 @@
+// Latency and load of the whole system (docs/benchmarks.md, "Latency and load").
+//
+// For each frame rate, with two cameras, in one private loopback network namespace:
+//   1. the pipeline: the real rig (real time), sensor_node and hand_node as processes, with the
+//      configurations `rig --write-configs` writes for a copy of the scenario at that rate, for a
+//      fixed wall time after the task started. End to end (camera timestamp -> ArmCommand
+//      received by the arm controller) is the rig's own report; the stages come from the
+//      timestamps on the wire (TactileFrames, and the copies of ArmCommands hand_node publishes
+//      beside its events); CPU per process from /proc/<pid>/stat; slip onset -> re-compress
+//      command from the rig's ground truth and hand_node's RECOMPRESS events.
+//   2. the transport alone, in the same run: the rig's fake GigE Vision cameras to a plain
+//      Aravis receiver (tactile::camera::AravisCamera, what sensor_node uses, nothing else), and
+//      a ZeroMQ round trip (PUB/SUB out, DEALER/ROUTER back, through an echo process) with
+//      messages the size of the run's TactileFrames and ArmCommands, at the same rate.
+// Prints a table, writes OUT/latency.json and OUT/latency.png; progress on standard error.
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+#include <zmq.hpp>
+
+#include "tactile/camera/aravis_camera.hpp"
+#include "tactile/camera/private_network.hpp"
+#include "tactile/plot/figure.hpp"
+#include "tactile/util/clock.hpp"
+#include "tactile/util/files.hpp"
+#include "tactile/util/stop.hpp"
+#include "tactile/v1/tactile.pb.h"
+#include "tactile/wire/envelope.hpp"
+#include "tactile/wire/sockets.hpp"
+
+namespace tactile::bench {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using std::chrono::milliseconds;
+
+constexpr const char* kCameraAddresses[2] = {"127.0.0.2", "127.0.0.3"};
+
+struct Settings {
+  std::vector<double> rates{100.0, 200.0, 500.0};
+  double seconds = 20.0;            // measured wall time of each pipeline run
+  double warmup_s = 2.0;            // after the task started (first ArmCommand), not measured
+  double transport_seconds = 10.0;  // measured wall time of each transport-alone run
+  double start_timeout_s = 60.0;    // for the task to start
+  fs::path build_dir;
+  fs::path scenario;
+  fs::path out = "bench-out/latency";
+  bool plot = true;
+  bool skip_transport = false;
+};
+
+void progress(const std::string& line) {
+  std::fprintf(stderr, "system_latency_bench: %s\n", line.c_str());
+}
+
+// ------------------------------------------------------------------------------------------
+// Statistics
+
+// Nearest rank, as the rig's report computes its latency percentiles.
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
+  return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
+}
+
+struct Dist {
+  std::size_t n = 0;
+  double p50 = std::nan("");
+  double p99 = std::nan("");
+  double max = std::nan("");
+};
+
+Dist dist(const std::vector<double>& v) {
+  Dist d;
+  d.n = v.size();
+  if (v.empty()) return d;
+  d.p50 = percentile(v, 0.50);
+  d.p99 = percentile(v, 0.99);
+  d.max = *std::max_element(v.begin(), v.end());
+  return d;
+}
+
+json to_json(const Dist& d) {
+  const auto num = [](double x) { return std::isfinite(x) ? json(x) : json(nullptr); };
+  return {{"n", d.n}, {"p50_ms", num(d.p50)}, {"p99_ms", num(d.p99)}, {"max_ms", num(d.max)}};
+}
+
+std::string ms(double x, int digits = 3) {
+  return std::isfinite(x) ? fmt::format("{:.{}f}", x, digits) : std::string("-");
+}
+
+// ------------------------------------------------------------------------------------------
+// Child processes
+
+class Child {
+ public:
+  Child(std::string name, std::vector<std::string> argv, const fs::path& log)
+      : name_(std::move(name)) {
+    const int log_fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+    const int null_fd = ::open("/dev/null", O_RDWR | O_CLOEXEC);
+    if (log_fd < 0 || null_fd < 0)
+      throw std::runtime_error(
+          fmt::format("cannot open {}: {}", log.string(), std::strerror(errno)));
+    std::vector<char*> args;
+    for (auto& a : argv)
+      args.push_back(a.data());
+    args.push_back(nullptr);
+    const pid_t parent = ::getpid();
+    pid_ = ::fork();
+    if (pid_ < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
+    if (pid_ == 0) {
+      ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // nothing outlives the benchmark
+      if (::getppid() != parent) ::_exit(127);
+      ::dup2(null_fd, 0);
+      ::dup2(log_fd, 1);
+      ::dup2(log_fd, 2);
+      ::execv(args[0], args.data());
+      ::_exit(127);
+    }
+    ::close(log_fd);
+    ::close(null_fd);
+  }
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+  ~Child() {
+    if (running()) {
+      ::kill(pid_, SIGKILL);
+      int st = 0;
+      ::waitpid(pid_, &st, 0);
+    }
+  }
+
+  const std::string& name() const { return name_; }
+  pid_t pid() const { return pid_; }
+  bool running() {
+    if (status_) return false;
+    int st = 0;
+    if (::waitpid(pid_, &st, WNOHANG) == pid_) {
+      status_ = st;
+      return false;
+    }
+    return true;
+  }
+  // Exit code (128 + signal when killed); SIGINT first, SIGKILL after `timeout`.
+  int stop(milliseconds timeout) {
+    if (running()) ::kill(pid_, SIGINT);
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (running() && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(milliseconds(10));
+    if (running()) {
+      progress(
+          fmt::format("{} did not stop within {} ms of SIGINT: killed", name_, timeout.count()));
+      ::kill(pid_, SIGKILL);
+      int st = 0;
+      ::waitpid(pid_, &st, 0);
+      status_ = st;
+    }
+    return exit_code();
+  }
+  int exit_code() const {
+    if (!status_) return -1;
+    if (WIFEXITED(*status_)) return WEXITSTATUS(*status_);
+    return 128 + WTERMSIG(*status_);
+  }
+
+ private:
+  std::string name_;
+  pid_t pid_ = -1;
+  std::optional<int> status_;
+};
+
+std::string tail_of(const fs::path& log, std::size_t lines = 5) {
+  std::ifstream in(log);
+  std::vector<std::string> all;
+  for (std::string l; std::getline(in, l);)
+    all.push_back(l);
+  std::string s;
+  for (std::size_t i = all.size() > lines ? all.size() - lines : 0; i < all.size(); ++i)
+    s += "\n    " + all[i];
+  return s;
+}
+
+// utime + stime of a process (all its threads), in seconds.
+double cpu_seconds(pid_t pid) {
+  std::ifstream in(fmt::format("/proc/{}/stat", pid));
+  std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto close = stat.rfind(')');
+  if (close == std::string::npos) return std::nan("");
+  std::istringstream fields(stat.substr(close + 2));
+  std::string f;
+  unsigned long long utime = 0;
+  unsigned long long stime = 0;
+  // Fields after the command: state(3) ... utime(14) stime(15).
+  for (int i = 3; i <= 15 && fields >> f; ++i) {
+    if (i == 14) utime = std::stoull(f);
+    if (i == 15) stime = std::stoull(f);
+  }
+  return static_cast<double>(utime + stime) / static_cast<double>(::sysconf(_SC_CLK_TCK));
+}
+
+struct CpuWindow {
+  std::map<std::string, double> start;
+  std::int64_t start_ns = 0;
+  void begin(const std::map<std::string, pid_t>& pids) {
+    for (const auto& [name, pid] : pids)
+      start[name] = cpu_seconds(pid);
+    start_ns = util::monotonic_ns();
+  }
+  // Percent of one core per process over the window.
+  std::map<std::string, double> end(const std::map<std::string, pid_t>& pids) const {
+    const double wall = static_cast<double>(util::monotonic_ns() - start_ns) * 1e-9;
+    std::map<std::string, double> pct;
+    for (const auto& [name, pid] : pids)
+      pct[name] = 100.0 * (cpu_seconds(pid) - start.at(name)) / wall;
+    return pct;
+  }
+};
+
+std::string load_average() {
+  std::string load;
+  std::getline(std::ifstream("/proc/loadavg"), load);
+  return load;
+}
+
+// ------------------------------------------------------------------------------------------
+// The pipeline: rig, sensor_node, hand_node
+
+struct Captured {
+  std::int64_t receive_ns;
+  std::string topic;
+  std::vector<std::uint8_t> payload;
+};
+
+struct FrameInfo {
+  std::string sensor;
+  std::uint64_t sequence = 0;
+  v1::FrameStatus status = v1::FRAME_STATUS_UNSPECIFIED;
+  std::int64_t camera_ns = 0;
+  std::int64_t receive_ns = 0;
+  std::int64_t publish_ns = 0;
+  double measure_us = 0;
+  std::uint32_t frames_skipped = 0;
+};
+
+struct RefInfo {
+  std::string sensor;
+  std::uint64_t sequence = 0;
+  std::int64_t camera_ns = 0;
+  std::int64_t hand_receive_ns = 0;
+};
+
+struct CommandInfo {
+  std::uint64_t sequence = 0;
+  std::int64_t send_ns = 0;
+  std::string kind;  // move_to, finger_velocities, hold, open, stop
+  std::vector<RefInfo> answers;
+};
+
+struct PipelineResult {
+  double fps = 0;
+  double window_s = 0;
+  bool task_ended_early = false;
+  std::string load_at_start;
+  // The rig's report (end to end over the whole run) and its counters line.
+  json report;
+  std::string rig_counters;
+  Dist e2e;  // from the report: p50, p99, max; n = the commands' answers (unknown: 0)
+  // Stages, in the measured window.
+  Dist gige;               // camera timestamp -> sensor_node received the frame's last packet
+  Dist measure;            // received -> handed to ZeroMQ (measurement and encoding)
+  Dist measure_core;       // the measurement core alone (TactileFrame.measure_time_us)
+  Dist pub_recv;           // sensor_node published -> hand_node received
+  Dist control;            // hand_node received the freshest answered frame -> command sent
+  Dist cam_to_send_fresh;  // camera timestamp of the freshest answer -> command sent
+  Dist cam_to_send_all;    // every answer (as the rig counts end to end) -> command sent
+  // The same without Hold and Stop: a stale hold answers frames older than stale_after_s by
+  // its very reason.
+  Dist cam_to_send_all_no_hold;
+  std::map<std::string, std::uint64_t> command_kinds;
+  std::vector<double> cam_to_send_fresh_samples;
+  std::uint64_t frames = 0;
+  std::uint64_t frames_complete = 0;
+  std::uint64_t frames_incomplete = 0;  // status other than COMPLETE (NO_REFERENCE apart)
+  std::uint64_t frames_skipped = 0;     // camera frames lost before a published frame
+  std::uint64_t sequence_gaps = 0;      // TactileFrames this benchmark's subscriber missed
+  std::uint64_t commands = 0;
+  std::size_t frame_bytes_p50 = 0;
+  std::size_t command_bytes_p50 = 0;
+  std::map<std::string, double> cpu;  // percent of one core
+  // Slip onset (ground truth) -> re-compress command sent, whole run.
+  std::vector<double> slip_to_recompress_ms;
+  std::uint64_t recompress_events = 0;
+  std::uint64_t recompress_no_command = 0;  // no command with the event's answers before it
+  std::uint64_t recompress_no_onset = 0;    // no true onset of that fingertip within 3 periods
+  std::uint64_t true_slip_episodes = 0;     // per fingertip, whole run
+  Dist cam_to_send_all_run;                 // every answer, whole run (the rig's samples)
+  json recompress_detail = json::array();
+  std::map<std::string, std::uint64_t> events;
+};
+
+fs::path program(const Settings& s, const char* rel) {
+  const fs::path p = s.build_dir / rel;
+  if (!fs::exists(p))
+    throw std::runtime_error(
+        fmt::format("{} is missing: build it first (cmake --build {} --target "
+                    "rig sensor_node hand_node)",
+                    p.string(), s.build_dir.string()));
+  return p;
+}
+
+// A copy of the scenario at `fps`, long enough that the rig never stops on its own first.
+fs::path write_scenario(const Settings& s, double fps, double max_time_s, const fs::path& dir) {
+  YAML::Node node;
+  try {
+    node = YAML::LoadFile(s.scenario.string());
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format("{}: {}", s.scenario.string(), e.what()));
+  }
+  if (!node["camera"] || !node["camera"].IsMap())
+    throw std::runtime_error(fmt::format("{}: no camera section", s.scenario.string()));
+  node["camera"]["fps"] = fps;
+  node["sim"]["max_time_s"] = max_time_s;
+  const fs::path path = dir / fmt::format("scenario-{}fps.yaml", fps);
+  YAML::Emitter em;
+  em << node;
+  util::write_file_atomic(path, std::string(em.c_str()) + "\n");
+  return path;
+}
+
+void run_checked(const std::string& name, std::vector<std::string> argv, const fs::path& log) {
+  Child c(name, std::move(argv), log);
+  if (c.stop(milliseconds(30000)) != 0 && c.exit_code() != 0)
+    throw std::runtime_error(
+        fmt::format("{} failed (status {}):{}", name, c.exit_code(), tail_of(log)));
+}
+
+void capture_until(wire::Subscriber& sub, std::vector<Captured>& into, std::int64_t until_mono_ns,
+                   const std::vector<Child*>& children, const std::function<bool()>& done) {
+  wire::TopicMessage m;
+  std::array<zmq::socket_ref, 1> socks{sub.socket()};
+  while (util::monotonic_ns() < until_mono_ns && !util::stop_requested()) {
+    wire::poll_readable(socks, milliseconds(20));
+    while (sub.receive(m, milliseconds(0)))
+      into.push_back({util::realtime_ns(), m.topic, m.payload});
+    for (Child* c : children) {
+      if (!c->running()) return;
+    }
+    if (done && done()) break;
+  }
+}
+
+PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) {
+  PipelineResult r;
+  r.fps = fps;
+  fs::create_directories(dir / "config");
+  fs::create_directories(dir / "logs");
+  const fs::path rig = program(s, "rig/rig");
+  const fs::path sensor = program(s, "sensor_node/sensor_node");
+  const fs::path hand = program(s, "hand_node/hand_node");
+  const double budget = s.start_timeout_s + s.warmup_s + s.seconds + 60.0;
+  const fs::path scenario = write_scenario(s, fps, budget, dir);
+  run_checked(
+      "rig --write-configs",
+      {rig.string(), "--scenario", scenario.string(), "--write-configs", (dir / "config").string()},
+      dir / "logs" / "rig.log");
+
+  zmq::context_t ctx;
+  // Everything the programs publish that the stages need; the rig's truth for slip onsets.
+  wire::Subscriber sub(ctx,
+                       {"tcp://127.0.0.1:5555", "tcp://127.0.0.1:5557", "tcp://127.0.0.1:5558"},
+                       {"frame/", "truth", "event", "command"});
+  std::vector<Captured> cap;
+  cap.reserve(static_cast<std::size_t>(fps * 4 * (s.seconds + s.warmup_s + 30)));
+
+  r.load_at_start = load_average();
+  const fs::path report = dir / "report.json";
+  Child rig_p("rig",
+              {rig.string(), "--scenario", scenario.string(), "--report", report.string(),
+               "--wait-for-hand", fmt::format("{}", s.start_timeout_s)},
+              dir / "logs" / "rig.log");
+  Child sensor_p("sensor_node",
+                 {sensor.string(), "--config", (dir / "config" / "sensor_node.yaml").string()},
+                 dir / "logs" / "sensor_node.log");
+  Child hand_p("hand_node",
+               {hand.string(), "--config", (dir / "config" / "hand_node.yaml").string()},
+               dir / "logs" / "hand_node.log");
+  std::vector<Child*> children{&rig_p, &sensor_p, &hand_p};
+  const auto fail = [&](const std::string& what) {
+    std::string msg = what;
+    for (Child* c : children) {
+      if (!c->running())
+        msg += fmt::format("\n  {} exited with status {}; its log ends:{}", c->name(),
+                           c->exit_code(), tail_of(dir / "logs" / (c->name() + ".log")));
+    }
+    for (Child* c : children)
+      c->stop(milliseconds(3000));
+    throw std::runtime_error(msg);
+  };
+
+  // The task starts when hand_node has both fingertips and the arm: its first command.
+  progress(
+      fmt::format("{:.0f} fps: rig, sensor_node and hand_node started; waiting for the task", fps));
+  std::size_t seen = 0;
+  bool started = false;
+  capture_until(sub, cap, util::monotonic_ns() + static_cast<std::int64_t>(s.start_timeout_s * 1e9),
+                children, [&] {
+                  for (; seen < cap.size(); ++seen) {
+                    if (cap[seen].topic == "command") started = true;
+                  }
+                  return started;
+                });
+  if (!started)
+    fail(fmt::format("{:.0f} fps: the task did not start within {} s", fps, s.start_timeout_s));
+  capture_until(sub, cap, util::monotonic_ns() + static_cast<std::int64_t>(s.warmup_s * 1e9),
+                children, {});
+
+  const std::map<std::string, pid_t> pids{{"rig", rig_p.pid()},
+                                          {"sensor_node", sensor_p.pid()},
+                                          {"hand_node", hand_p.pid()},
+                                          {"benchmark", ::getpid()}};
+  CpuWindow cpu;
+  cpu.begin(pids);
+  const std::int64_t w0 = util::realtime_ns();
+  const std::int64_t m0 = util::monotonic_ns();
+  progress(fmt::format("{:.0f} fps: task started; measuring {} s", fps, s.seconds));
+  capture_until(sub, cap, m0 + static_cast<std::int64_t>(s.seconds * 1e9), children, {});
+  const bool all_running = rig_p.running() && sensor_p.running() && hand_p.running();
+  if (all_running) r.cpu = cpu.end(pids);
+  const std::int64_t w1 = util::realtime_ns();
+  r.window_s = static_cast<double>(w1 - w0) * 1e-9;
+  if (util::stop_requested()) fail("interrupted");
+  if (!all_running) {
+    // The task may end (DONE, then the rig stops) before the window does: that is a result,
+    // but the CPU of a process that is gone cannot be read.
+    r.task_ended_early = true;
+    if (rig_p.running()) fail(fmt::format("{:.0f} fps: a program stopped during the run", fps));
+    progress(
+        fmt::format("{:.0f} fps: the task ended after {:.1f} s of the window", fps, r.window_s));
+  }
+  // The nodes first (a sensor_node whose cameras vanished first spends seconds giving up on
+  // them), then the rig, which writes its report on SIGINT.
+  hand_p.stop(milliseconds(5000));
+  sensor_p.stop(milliseconds(10000));
+  const int rig_status = rig_p.stop(milliseconds(10000));
+  if (rig_status != 0 || !fs::exists(report))
+    fail(fmt::format("{:.0f} fps: the rig wrote no report (status {})", fps, rig_status));
+  r.report = json::parse(std::ifstream(report));
+  {
+    std::ifstream log(dir / "logs" / "rig.log");
+    for (std::string l; std::getline(log, l);) {
+      const auto at = l.find("frames rendered");
+      if (at != std::string::npos) r.rig_counters = l.substr(at);
+    }
+  }
+  if (r.report.contains("latency_ms") && r.report["latency_ms"].is_object()) {
+    const json& l = r.report["latency_ms"];
+    r.e2e.p50 = l.value("p50", std::nan(""));
+    r.e2e.p99 = l.value("p99", std::nan(""));
+    r.e2e.max = l.value("max", std::nan(""));
+  }
+
+  // Decode after the run: nothing but copying competes with the programs while they run.
+  wire::EnvelopeDecoder dec;
+  std::map<std::pair<std::string, std::uint64_t>, FrameInfo> frames;
+  std::vector<CommandInfo> commands;
+  std::vector<v1::Event> recompress;
+  // Per fingertip: (camera timestamp, any element truly sliding), in frame order.
+  std::map<std::string, std::vector<std::pair<std::int64_t, bool>>> truth;
+  std::map<std::string, std::uint64_t> last_seq;
+  std::vector<double> frame_bytes;
+  std::vector<double> command_bytes;
+  for (const Captured& c : cap) {
+    if (dec.decode(c.payload) != wire::DecodeStatus::kOk) continue;
+    const v1::Envelope& env = dec.envelope();
+    const bool in_window = c.receive_ns >= w0 && c.receive_ns <= w1;
+    if (env.has_tactile_frame()) {
+      const v1::TactileFrame& f = env.tactile_frame();
+      FrameInfo fi{f.sensor_id(),
+                   f.sequence(),
+                   f.status(),
+                   f.camera_timestamp_ns(),
+                   f.receive_timestamp_ns(),
+                   f.publish_timestamp_ns(),
+                   f.measure_time_us(),
+                   f.frames_skipped()};
+      frames[{fi.sensor, fi.sequence}] = fi;
+      auto [it, fresh] = last_seq.try_emplace(fi.sensor, fi.sequence);
+      if (!fresh) {
+        if (in_window && fi.sequence > it->second + 1)
+          r.sequence_gaps += fi.sequence - it->second - 1;
+        it->second = fi.sequence;
+      }
+      if (!in_window) continue;
+      ++r.frames;
+      r.frames_skipped += fi.frames_skipped;
+      if (fi.status == v1::FRAME_STATUS_COMPLETE) {
+        ++r.frames_complete;
+        frame_bytes.push_back(static_cast<double>(c.payload.size()));
+      } else if (fi.status != v1::FRAME_STATUS_NO_REFERENCE) {
+        ++r.frames_incomplete;
+      }
+    } else if (env.has_arm_command()) {
+      const v1::ArmCommand& a = env.arm_command();
+      const auto* oneof = a.GetDescriptor()->FindOneofByName("command");
+      const auto* field = a.GetReflection()->GetOneofFieldDescriptor(a, oneof);
+      CommandInfo ci{a.sequence(), a.send_timestamp_ns(), field ? field->name() : "none", {}};
+      for (const v1::FrameRef& ref : a.answers())
+        ci.answers.push_back({ref.sensor_id(), ref.sequence(), ref.camera_timestamp_ns(),
+                              ref.receive_timestamp_ns()});
+      commands.push_back(ci);
+      if (in_window) command_bytes.push_back(static_cast<double>(c.payload.size()));
+    } else if (env.has_event()) {
+      ++r.events[v1::EventKind_Name(env.event().kind())];
+      if (env.event().kind() == v1::EVENT_KIND_RECOMPRESS) recompress.push_back(env.event());
+    } else if (env.has_ground_truth()) {
+      for (const v1::FingertipTruth& ft : env.ground_truth().fingertips()) {
+        bool sliding = false;
+        for (const v1::ElementTruth& e : ft.elements())
+          sliding = sliding || e.sliding();
+        truth[ft.sensor_id()].emplace_back(ft.camera_timestamp_ns(), sliding);
+      }
+    }
+  }
+  r.frame_bytes_p50 = static_cast<std::size_t>(percentile(frame_bytes, 0.5));
+  r.command_bytes_p50 = static_cast<std::size_t>(percentile(command_bytes, 0.5));
+
+  std::vector<double> gige;
+  std::vector<double> measure;
+  std::vector<double> core;
+  for (const auto& [key, f] : frames) {
+    if (f.status != v1::FRAME_STATUS_COMPLETE || f.camera_ns < w0 || f.camera_ns > w1) continue;
+    gige.push_back(static_cast<double>(f.receive_ns - f.camera_ns) * 1e-6);
+    measure.push_back(static_cast<double>(f.publish_ns - f.receive_ns) * 1e-6);
+    core.push_back(f.measure_us * 1e-3);
+  }
+  r.gige = dist(gige);
+  r.measure = dist(measure);
+  r.measure_core = dist(core);
+
+  std::vector<double> pub_recv;
+  std::vector<double> control;
+  std::vector<double> fresh;
+  std::vector<double> all;
+  std::vector<double> all_no_hold;
+  std::map<std::pair<std::string, std::uint64_t>, bool> counted;
+  for (const CommandInfo& c : commands) {
+    if (c.send_ns < w0 || c.send_ns > w1 || c.answers.empty()) continue;
+    ++r.commands;
+    ++r.command_kinds[c.kind];
+    const RefInfo* newest = nullptr;
+    for (const RefInfo& a : c.answers) {
+      if (a.camera_ns > 0) all.push_back(static_cast<double>(c.send_ns - a.camera_ns) * 1e-6);
+      if (a.camera_ns > 0 && c.kind != "hold" && c.kind != "stop")
+        all_no_hold.push_back(static_cast<double>(c.send_ns - a.camera_ns) * 1e-6);
+      if (a.hand_receive_ns > 0 &&
+          (newest == nullptr || a.hand_receive_ns > newest->hand_receive_ns))
+        newest = &a;
+      const auto f = frames.find({a.sensor, a.sequence});
+      if (a.hand_receive_ns > 0 && f != frames.end() && !counted[{a.sensor, a.sequence}]) {
+        counted[{a.sensor, a.sequence}] = true;
+        pub_recv.push_back(static_cast<double>(a.hand_receive_ns - f->second.publish_ns) * 1e-6);
+      }
+    }
+    if (newest != nullptr) {
+      control.push_back(static_cast<double>(c.send_ns - newest->hand_receive_ns) * 1e-6);
+      fresh.push_back(static_cast<double>(c.send_ns - newest->camera_ns) * 1e-6);
+    }
+  }
+  std::vector<double> all_run;
+  for (const CommandInfo& c : commands) {
+    for (const RefInfo& a : c.answers) {
+      if (a.camera_ns > 0) all_run.push_back(static_cast<double>(c.send_ns - a.camera_ns) * 1e-6);
+    }
+  }
+  r.cam_to_send_all_run = dist(all_run);
+  r.e2e.n = all_run.size();  // the rig takes one sample per answer of every command it received
+  for (const auto& [tip, tr] : truth) {
+    for (std::size_t k = 0; k < tr.size(); ++k) {
+      if (tr[k].second && (k == 0 || !tr[k - 1].second)) ++r.true_slip_episodes;
+    }
+  }
+  r.pub_recv = dist(pub_recv);
+  r.control = dist(control);
+  r.cam_to_send_fresh = dist(fresh);
+  r.cam_to_send_all = dist(all);
+  r.cam_to_send_all_no_hold = dist(all_no_hold);
+  r.cam_to_send_fresh_samples = fresh;
+
+  // Slip onset -> re-compress command, over the whole run: a RECOMPRESS event names the frames
+  // it answers; its command is the one hand_node sent just before it in the same step (same
+  // answers). The onset is the start of the fingertip's true slip episode (some element sliding
+  // after a frame with none) nearest the answered frame, within three frame periods either side:
+  // the measurement may see a slip a frame before the truth calls it one, and then the time is
+  // negative.
+  const auto near_ns = static_cast<std::int64_t>(3e9 / fps) + 1'000'000;
+  for (const v1::Event& e : recompress) {
+    ++r.recompress_events;
+    std::int64_t answered = 0;
+    for (const v1::FrameRef& a : e.answers()) {
+      if (a.sensor_id() == e.sensor_id()) answered = a.camera_timestamp_ns();
+    }
+    const CommandInfo* cmd = nullptr;
+    for (const CommandInfo& c : commands) {
+      if (c.send_ns > e.time_ns()) break;
+      bool same = c.answers.size() == static_cast<std::size_t>(e.answers_size());
+      for (std::size_t i = 0; same && i < c.answers.size(); ++i)
+        same = c.answers[i].camera_ns == e.answers(static_cast<int>(i)).camera_timestamp_ns();
+      if (same) cmd = &c;
+    }
+    const auto& tr = truth[e.sensor_id()];
+    std::int64_t onset = 0;
+    for (std::size_t k = 0; k < tr.size() && tr[k].first <= answered; ++k) {
+      if (tr[k].second && (k == 0 || !tr[k - 1].second)) onset = tr[k].first;
+    }
+    // What happened around it, for the JSON: the fingertip's truth onsets nearest before and after.
+    std::int64_t onset_after = 0;
+    for (std::size_t k = 1; k < tr.size(); ++k) {
+      if (tr[k].first > answered && tr[k].second && !tr[k - 1].second) {
+        onset_after = tr[k].first;
+        break;
+      }
+    }
+    const auto rel = [&](std::int64_t t) {
+      return t == 0 ? json(nullptr) : json(static_cast<double>(t - answered) * 1e-6);
+    };
+    r.recompress_detail.push_back(
+        {{"sensor_id", e.sensor_id()},
+         {"answered_camera_timestamp_ns", answered},
+         {"command_sent_ms_after_answered", cmd ? rel(cmd->send_ns) : json(nullptr)},
+         {"true_onset_before_ms", rel(onset)},
+         {"true_onset_after_ms", rel(onset_after)},
+         {"sliding_in_answered_frame", [&] {
+            for (const auto& [t, sl] : tr) {
+              if (t == answered) return json(sl);
+            }
+            return json(nullptr);
+          }()}});
+    if (cmd == nullptr || answered == 0) {
+      ++r.recompress_no_command;
+      continue;
+    }
+    std::int64_t nearest = 0;
+    for (const std::int64_t o : {onset, onset_after}) {
+      if (o != 0 && std::llabs(o - answered) <= near_ns &&
+          (nearest == 0 || std::llabs(o - answered) < std::llabs(nearest - answered)))
+        nearest = o;
+    }
+    if (nearest == 0) {
+      ++r.recompress_no_onset;
+      continue;
+    }
+    r.slip_to_recompress_ms.push_back(static_cast<double>(cmd->send_ns - nearest) * 1e-6);
+  }
+  return r;
+}
+
+// ------------------------------------------------------------------------------------------
+// The transport alone
+
+struct AravisResult {
+  Dist latency;  // camera timestamp -> receive_timestamp_ns, whole frames
+  std::uint64_t frames = 0;
+  std::uint64_t complete = 0;
+  std::uint64_t lost = 0;
+  double receiver_cpu = std::nan("");  // this process (the two receivers), % of one core
+  double rig_cpu = std::nan("");
+};
+
+// The rig alone serves its two fake cameras (the same images, rate and timestamps as in the
+// pipeline); a plain Aravis receiver per camera in this process takes the frames and does
+// nothing with them.
+AravisResult run_aravis(const Settings& s, double fps, const fs::path& dir) {
+  AravisResult r;
+  const fs::path rig = program(s, "rig/rig");
+  const double budget = s.transport_seconds + 60.0;
+  const fs::path scenario = write_scenario(s, fps, budget, dir);
+  const YAML::Node sc = YAML::LoadFile(scenario.string());
+  const int width = sc["camera"]["width"].as<int>(640);
+  const int height = sc["camera"]["height"].as<int>(480);
+  const int depth = sc["camera"]["bit_depth"].as<int>(8);
+  Child rig_p("rig",
+              {rig.string(), "--scenario", scenario.string(), "--wait-for-hand",
+               fmt::format("{}", budget), "--report", (dir / "transport-rig.json").string()},
+              dir / "logs" / "transport-rig.log");
+  for (const char* address : kCameraAddresses) {
+    const std::int64_t deadline = util::monotonic_ns() + 30'000'000'000;
+    while (!camera::gvcp_device_answers(address, milliseconds(200))) {
+      if (!rig_p.running() || util::monotonic_ns() > deadline)
+        throw std::runtime_error(fmt::format("transport: the rig's camera {} never answered:{}",
+                                             address, tail_of(dir / "logs" / "transport-rig.log")));
+    }
+  }
+  std::vector<std::unique_ptr<camera::AravisCamera>> receivers;
+  for (const char* address : kCameraAddresses) {
+    camera::AravisCameraOptions o;
+    o.camera = address;
+    o.width = width;
+    o.height = height;
+    o.pixel_format = depth == 16 ? PixelFormat::kMono16 : PixelFormat::kMono8;
+    o.frame_rate_hz = fps;
+    receivers.push_back(std::make_unique<camera::AravisCamera>(o));
+    receivers.back()->start();
+  }
+  const std::int64_t warmup_ns = 1'000'000'000;
+  const auto measure_ns = static_cast<std::int64_t>(s.transport_seconds * 1e9);
+  const std::int64_t begin = util::monotonic_ns();
+  std::array<std::vector<double>, 2> lat;
+  std::array<AravisResult, 2> counts;
+  {
+    std::vector<std::jthread> threads;
+    for (std::size_t c = 0; c < 2; ++c) {
+      threads.emplace_back([&, c] {
+        lat[c].reserve(static_cast<std::size_t>(fps * s.transport_seconds * 1.2) + 16);
+        while (util::monotonic_ns() < begin + warmup_ns + measure_ns) {
+          const camera::Frame f = receivers[c]->wait_frame(milliseconds(200));
+          if (!f.received || util::monotonic_ns() < begin + warmup_ns) continue;
+          ++counts[c].frames;
+          counts[c].lost += f.frames_lost;
+          if (f.status != camera::FrameStatus::kComplete) continue;
+          ++counts[c].complete;
+          lat[c].push_back(static_cast<double>(f.receive_timestamp_ns - f.camera_timestamp_ns) *
+                           1e-6);
+          receivers[c]->release_frame();
+        }
+      });
+    }
+    while (util::monotonic_ns() < begin + warmup_ns)
+      std::this_thread::sleep_for(milliseconds(5));
+    const std::map<std::string, pid_t> pids{{"receiver", ::getpid()}, {"rig", rig_p.pid()}};
+    CpuWindow cpu;
+    cpu.begin(pids);
+    while (util::monotonic_ns() < begin + warmup_ns + measure_ns)
+      std::this_thread::sleep_for(milliseconds(5));
+    const auto pct = cpu.end(pids);
+    r.receiver_cpu = pct.at("receiver");
+    r.rig_cpu = pct.at("rig");
+  }
+  for (auto& rc : receivers)
+    rc->stop();
+  receivers.clear();
+  rig_p.stop(milliseconds(10000));
+  std::vector<double> both = lat[0];
+  both.insert(both.end(), lat[1].begin(), lat[1].end());
+  r.latency = dist(both);
+  for (const AravisResult& c : counts) {
+    r.frames += c.frames;
+    r.complete += c.complete;
+    r.lost += c.lost;
+  }
+  return r;
+}
+
+struct ZmqResult {
+  Dist round_trip;  // PUB -> SUB, then DEALER -> ROUTER
+  Dist pub_sub;     // one way, PUB -> SUB
+  Dist dealer_router;
+  std::size_t frame_bytes = 0;
+  std::size_t command_bytes = 0;
+  std::uint64_t sent = 0;
+  std::uint64_t answered = 0;
+};
+
+// Echo process: every message on SUB goes back over DEALER at `reply_bytes`, carrying the
+// sender's stamp and the time it arrived here.
+int zmq_echo(const std::string& pub_endpoint, const std::string& router_endpoint,
+             std::size_t reply_bytes) {
+  util::install_stop_handlers();
+  zmq::context_t ctx;
+  wire::Subscriber sub(ctx, {pub_endpoint}, {"frame/"});
+  wire::Dealer dealer(ctx, router_endpoint);
+  std::vector<std::uint8_t> reply(std::max<std::size_t>(reply_bytes, 24));
+  // Announce ourselves so the ROUTER knows the peer.
+  std::memset(reply.data(), 0, reply.size());
+  dealer.send(reply);
+  wire::TopicMessage m;
+  std::array<zmq::socket_ref, 1> socks{sub.socket()};
+  while (!util::stop_requested()) {
+    wire::poll_readable(socks, milliseconds(100));
+    while (sub.receive(m, milliseconds(0))) {
+      const std::int64_t now = util::realtime_ns();
+      if (m.payload.size() < 16) continue;
+      std::memcpy(reply.data(), m.payload.data(), 16);
+      std::memcpy(reply.data() + 16, &now, 8);
+      dealer.send(reply);
+    }
+  }
+  return 0;
+}
+
+ZmqResult run_zmq(const Settings& s, double fps, std::size_t frame_bytes, std::size_t command_bytes,
+                  const fs::path& self, const fs::path& dir) {
+  ZmqResult r;
+  r.frame_bytes = std::max<std::size_t>(frame_bytes, 24);
+  r.command_bytes = std::max<std::size_t>(command_bytes, 24);
+  zmq::context_t ctx;
+  wire::Publisher pub(ctx, "tcp://127.0.0.1:*");
+  wire::Router router(ctx, "tcp://127.0.0.1:*");
+  const auto local = [](std::string e) {
+    const auto at = e.find("0.0.0.0");
+    if (at != std::string::npos) e.replace(at, 7, "127.0.0.1");
+    return e;
+  };
+  Child echo("zmq-echo",
+             {self.string(), "--zmq-echo", local(pub.endpoint()), local(router.endpoint()),
+              std::to_string(r.command_bytes)},
+             dir / "logs" / "zmq-echo.log");
+  std::string peer;
+  std::vector<std::uint8_t> in;
+  // Wait for the echo's hello, then for the subscription to take (slow joiner).
+  const std::int64_t deadline = util::monotonic_ns() + 10'000'000'000;
+  while (!router.receive(peer, in, milliseconds(50))) {
+    if (!echo.running() || util::monotonic_ns() > deadline)
+      throw std::runtime_error("transport: the ZeroMQ echo process did not connect:" +
+                               tail_of(dir / "logs" / "zmq-echo.log"));
+  }
+  std::vector<std::uint8_t> msg(r.frame_bytes, 0x5a);
+  const auto period_ns = static_cast<std::int64_t>(1e9 / fps);
+  const std::int64_t warmup_ns = 1'000'000'000;
+  const auto measure_ns = static_cast<std::int64_t>(s.transport_seconds * 1e9);
+  const std::int64_t begin = util::monotonic_ns();
+  std::int64_t next = begin;
+  std::uint64_t seq = 0;
+  std::vector<double> rtt;
+  std::vector<double> out_leg;
+  std::vector<double> back_leg;
+  std::array<zmq::socket_ref, 1> socks{router.socket()};
+  const std::uint64_t first_measured = static_cast<std::uint64_t>(2 * warmup_ns / period_ns);
+  while (util::monotonic_ns() < begin + warmup_ns + measure_ns + 100'000'000) {
+    const std::int64_t now = util::monotonic_ns();
+    if (now >= next && now < begin + warmup_ns + measure_ns) {
+      // Two sensors: two frames each period, as sensor_node publishes them.
+      for (const char* topic : {"frame/left", "frame/right"}) {
+        const std::int64_t t = util::realtime_ns();
+        ++seq;
+        std::memcpy(msg.data(), &t, 8);
+        std::memcpy(msg.data() + 8, &seq, 8);
+        pub.send(topic, msg);
+        if (seq > first_measured) ++r.sent;
+      }
+      next += period_ns;
+    }
+    const std::int64_t wait = std::max<std::int64_t>(0, next - util::monotonic_ns());
+    wire::poll_readable(socks, milliseconds(std::min<std::int64_t>(wait / 1'000'000, 5)));
+    while (router.receive(peer, in, milliseconds(0))) {
+      const std::int64_t t_back = util::realtime_ns();
+      if (in.size() < 24) continue;
+      std::int64_t t_sent = 0;
+      std::uint64_t n = 0;
+      std::int64_t t_echo = 0;
+      std::memcpy(&t_sent, in.data(), 8);
+      std::memcpy(&n, in.data() + 8, 8);
+      std::memcpy(&t_echo, in.data() + 16, 8);
+      if (n <= first_measured || t_sent == 0) continue;
+      ++r.answered;
+      rtt.push_back(static_cast<double>(t_back - t_sent) * 1e-6);
+      out_leg.push_back(static_cast<double>(t_echo - t_sent) * 1e-6);
+      back_leg.push_back(static_cast<double>(t_back - t_echo) * 1e-6);
+    }
+  }
+  echo.stop(milliseconds(3000));
+  r.round_trip = dist(rtt);
+  r.pub_sub = dist(out_leg);
+  r.dealer_router = dist(back_leg);
+  return r;
+}
+
+// ------------------------------------------------------------------------------------------
+// Report
+
+struct RateResult {
+  PipelineResult pipe;
+  std::optional<AravisResult> aravis;
+  std::optional<ZmqResult> zmq;
+};
+
+json result_json(const RateResult& rr) {
+  const PipelineResult& p = rr.pipe;
+  json j;
+  j["fps"] = p.fps;
+  j["cameras"] = 2;
+  j["window_s"] = p.window_s;
+  j["task_ended_early"] = p.task_ended_early;
+  j["load_average_at_start"] = p.load_at_start;
+  j["end_to_end_rig_report"] = to_json(p.e2e);
+  j["stages"] = {
+      {"gige_receive", to_json(p.gige)},
+      {"measure_and_publish", to_json(p.measure)},
+      {"measurement_core", to_json(p.measure_core)},
+      {"publish_to_hand_receive", to_json(p.pub_recv)},
+      {"control", to_json(p.control)},
+      {"camera_to_command_sent_freshest", to_json(p.cam_to_send_fresh)},
+      {"camera_to_command_sent_all_answers", to_json(p.cam_to_send_all)},
+      {"camera_to_command_sent_all_answers_without_hold_stop", to_json(p.cam_to_send_all_no_hold)}};
+  j["command_kinds_in_window"] = p.command_kinds;
+  j["frames"] = {{"published", p.frames},
+                 {"complete", p.frames_complete},
+                 {"incomplete", p.frames_incomplete},
+                 {"camera_frames_lost", p.frames_skipped},
+                 {"missed_by_benchmark", p.sequence_gaps},
+                 {"commands", p.commands},
+                 {"tactile_frame_bytes_p50", p.frame_bytes_p50},
+                 {"arm_command_bytes_p50", p.command_bytes_p50}};
+  j["cpu_percent_of_one_core"] = p.cpu;
+  j["slip_onset_to_recompress_command_sent"] = to_json(dist(p.slip_to_recompress_ms));
+  j["slip_onset_to_recompress_samples_ms"] = p.slip_to_recompress_ms;
+  j["recompress_events"] = p.recompress_events;
+  j["recompress_without_command"] = p.recompress_no_command;
+  j["recompress_without_true_onset_within_3_periods"] = p.recompress_no_onset;
+  j["true_slip_episodes"] = p.true_slip_episodes;
+  j["recompress_detail"] = p.recompress_detail;
+  j["camera_to_command_sent_all_answers_whole_run"] = to_json(p.cam_to_send_all_run);
+  j["events"] = p.events;
+  j["rig_report"] = p.report;
+  j["rig_counters"] = p.rig_counters;
+  if (rr.aravis) {
+    const AravisResult& a = *rr.aravis;
+    j["transport"]["aravis_receive"] = to_json(a.latency);
+    j["transport"]["aravis_frames"] = {
+        {"received", a.frames}, {"complete", a.complete}, {"lost", a.lost}};
+    j["transport"]["aravis_receiver_cpu_percent"] = a.receiver_cpu;
+    j["transport"]["aravis_rig_cpu_percent"] = a.rig_cpu;
+  }
+  if (rr.zmq) {
+    const ZmqResult& z = *rr.zmq;
+    j["transport"]["zmq_round_trip"] = to_json(z.round_trip);
+    j["transport"]["zmq_pub_sub"] = to_json(z.pub_sub);
+    j["transport"]["zmq_dealer_router"] = to_json(z.dealer_router);
+    j["transport"]["zmq_bytes"] = {{"out", z.frame_bytes}, {"back", z.command_bytes}};
+    j["transport"]["zmq_sent"] = z.sent;
+    j["transport"]["zmq_answered"] = z.answered;
+  }
+  if (rr.aravis && rr.zmq) {
+    const double t = rr.aravis->latency.p50 + rr.zmq->round_trip.p50;
+    j["transport"]["alone_p50_ms"] = t;
+    j["pipeline_added_p50_ms"] = p.e2e.p50 - t;
+    j["pipeline_over_transport_p50"] = p.e2e.p50 / t;
+  }
+  return j;
+}
+
+void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
+  std::printf(
+      "\nTwo cameras, %.0f s measured per rate after the task started (+%.0f s warm-up); "
+      "transport alone %.0f s per rate. Times in ms; CPU in %% of one core.\n\n",
+      s.seconds, s.warmup_s, s.transport_seconds);
+  std::printf(
+      "| fps | e2e p50 | e2e p99 | e2e max | transport alone p50 | added p50 | ratio | "
+      "incomplete | frames | sensor_node CPU | hand_node CPU | rig CPU | benchmark CPU |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const RateResult& rr : rs) {
+    const PipelineResult& p = rr.pipe;
+    double t = std::nan("");
+    if (rr.aravis && rr.zmq) t = rr.aravis->latency.p50 + rr.zmq->round_trip.p50;
+    const auto cpu = [&](const char* k) {
+      return p.cpu.count(k) ? fmt::format("{:.1f} %", p.cpu.at(k)) : std::string("-");
+    };
+    std::printf("| %.0f | %s | %s | %s | %s | %s | %s | %llu | %llu | %s | %s | %s | %s |\n", p.fps,
+                ms(p.e2e.p50).c_str(), ms(p.e2e.p99).c_str(), ms(p.e2e.max).c_str(), ms(t).c_str(),
+                ms(p.e2e.p50 - t).c_str(),
+                std::isfinite(t) ? fmt::format("{:.2f}", p.e2e.p50 / t).c_str() : "-",
+                static_cast<unsigned long long>(p.frames_incomplete),
+                static_cast<unsigned long long>(p.frames), cpu("sensor_node").c_str(),
+                cpu("hand_node").c_str(), cpu("rig").c_str(), cpu("benchmark").c_str());
+  }
+  std::printf(
+      "\nFrames and faults in the window (e2e samples: whole run, one per answer of every "
+      "command):\n\n"
+      "| fps | window s | TactileFrames | complete | incomplete | camera frames lost | missed by "
+      "the benchmark | commands | e2e samples | STALE_HOLD events (run) | rig |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const RateResult& rr : rs) {
+    const PipelineResult& p = rr.pipe;
+    const auto stale = p.events.find("EVENT_KIND_STALE_HOLD");
+    std::printf("| %.0f | %.1f | %llu | %llu | %llu | %llu | %llu | %llu | %zu | %llu | %s |\n",
+                p.fps, p.window_s, static_cast<unsigned long long>(p.frames),
+                static_cast<unsigned long long>(p.frames_complete),
+                static_cast<unsigned long long>(p.frames_incomplete),
+                static_cast<unsigned long long>(p.frames_skipped),
+                static_cast<unsigned long long>(p.sequence_gaps),
+                static_cast<unsigned long long>(p.commands), p.e2e.n,
+                static_cast<unsigned long long>(stale == p.events.end() ? 0 : stale->second),
+                p.rig_counters.c_str());
+  }
+  std::printf(
+      "\nStages, p50 / p99 (ms):\n\n"
+      "| fps | GigE Vision receive | measurement + publish | (core alone) | publish -> hand_node "
+      "receive | control | camera -> command sent (freshest) | camera -> command sent (all "
+      "answers) | (all answers, Hold/Stop apart) | commands (holds) |\n"
+      "|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const RateResult& rr : rs) {
+    const PipelineResult& p = rr.pipe;
+    const auto pp = [](const Dist& d) { return ms(d.p50) + " / " + ms(d.p99); };
+    const auto holds = p.command_kinds.find("hold");
+    std::printf(
+        "| %.0f | %s | %s | %s | %s | %s | %s | %s | %s | %llu (%llu) |\n", p.fps,
+        pp(p.gige).c_str(), pp(p.measure).c_str(), pp(p.measure_core).c_str(),
+        pp(p.pub_recv).c_str(), pp(p.control).c_str(), pp(p.cam_to_send_fresh).c_str(),
+        pp(p.cam_to_send_all).c_str(), pp(p.cam_to_send_all_no_hold).c_str(),
+        static_cast<unsigned long long>(p.commands),
+        static_cast<unsigned long long>(holds == p.command_kinds.end() ? 0 : holds->second));
+  }
+  std::printf(
+      "\nTransport alone, p50 / p99 / max (ms):\n\n"
+      "| fps | Aravis receive | frames (complete/received) | receiver CPU | ZeroMQ round trip | "
+      "PUB -> SUB | DEALER -> ROUTER | bytes out/back |\n|---|---|---|---|---|---|---|---|\n");
+  for (const RateResult& rr : rs) {
+    if (!rr.aravis || !rr.zmq) continue;
+    const auto ppm = [](const Dist& d) {
+      return ms(d.p50) + " / " + ms(d.p99) + " / " + ms(d.max);
+    };
+    const AravisResult& a = *rr.aravis;
+    const ZmqResult& z = *rr.zmq;
+    std::printf("| %.0f | %s | %llu/%llu | %.1f %% | %s | %s | %s | %zu/%zu |\n", rr.pipe.fps,
+                ppm(a.latency).c_str(), static_cast<unsigned long long>(a.complete),
+                static_cast<unsigned long long>(a.frames), a.receiver_cpu,
+                ppm(z.round_trip).c_str(), ppm(z.pub_sub).c_str(), ppm(z.dealer_router).c_str(),
+                z.frame_bytes, z.command_bytes);
+  }
+  std::printf(
+      "\nSlip onset (ground truth) -> re-compress command sent by hand_node, whole run:\n\n"
+      "| fps | true slip episodes | re-compressions | with a true onset within 3 periods | without "
+      "| min | p50 | max | 2 periods + 1 ms |\n|---|---|---|---|---|---|---|---|---|\n");
+  for (const RateResult& rr : rs) {
+    const PipelineResult& p = rr.pipe;
+    const Dist d = dist(p.slip_to_recompress_ms);
+    const double lo =
+        p.slip_to_recompress_ms.empty()
+            ? std::nan("")
+            : *std::min_element(p.slip_to_recompress_ms.begin(), p.slip_to_recompress_ms.end());
+    std::printf("| %.0f | %llu | %llu | %zu | %llu | %s | %s | %s | %.1f |\n", p.fps,
+                static_cast<unsigned long long>(p.true_slip_episodes),
+                static_cast<unsigned long long>(p.recompress_events), d.n,
+                static_cast<unsigned long long>(p.recompress_no_onset + p.recompress_no_command),
+                ms(lo, 2).c_str(), ms(d.p50, 2).c_str(), ms(d.max, 2).c_str(),
+                2000.0 / p.fps + 1.0);
+  }
+  std::fflush(stdout);
+}
+
+void write_plot(const std::vector<RateResult>& rs, const fs::path& path) {
+  plot::Figure fig(900, 520);
+  fig.title("camera timestamp -> ArmCommand sent (freshest answered frame)");
+  auto& panel = fig.add_panel();
+  panel.x_label("latency [ms]").y_label("commands");
+  double hi = 0;
+  for (const RateResult& rr : rs) {
+    const auto& v = rr.pipe.cam_to_send_fresh_samples;
+    if (!v.empty()) hi = std::max(hi, percentile(v, 0.99));
+  }
+  if (hi <= 0) return;
+  for (const RateResult& rr : rs) {
+    plot::Style st;
+    panel.histogram(rr.pipe.cam_to_send_fresh_samples, 60, fmt::format("{:.0f} fps", rr.pipe.fps),
+                    st, 0.0, hi);
+  }
+  fig.save_png(path);
+}
+
+int run(const Settings& s, const fs::path& self) {
+  camera::enter_private_network({kCameraAddresses[0], kCameraAddresses[1]});
+  util::install_stop_handlers();
+  fs::create_directories(s.out / "logs");
+  progress(fmt::format("build {}, scenario {}, output {}; {} cores, load average {}",
+                       s.build_dir.string(), s.scenario.string(), s.out.string(),
+                       std::thread::hardware_concurrency(), load_average()));
+  std::vector<RateResult> results;
+  json all;
+  all["machine"] = {{"cores", std::thread::hardware_concurrency()},
+                    {"load_average_at_start", load_average()}};
+  all["settings"] = {{"seconds", s.seconds},
+                     {"warmup_s", s.warmup_s},
+                     {"transport_seconds", s.transport_seconds},
+                     {"scenario", s.scenario.string()}};
+  for (const double fps : s.rates) {
+    const fs::path dir = s.out / fmt::format("{}fps", fps);
+    fs::create_directories(dir / "logs");
+    RateResult rr;
+    rr.pipe = run_pipeline(s, fps, dir);
+    progress(
+        fmt::format("{:.0f} fps: end to end p50 {} ms, p99 {} ms, max {} ms; {} frames, {} "
+                    "incomplete",
+                    fps, ms(rr.pipe.e2e.p50), ms(rr.pipe.e2e.p99), ms(rr.pipe.e2e.max),
+                    rr.pipe.frames, rr.pipe.frames_incomplete));
+    if (!s.skip_transport) {
+      progress(fmt::format("{:.0f} fps: transport alone, Aravis receive ({} s)", fps,
+                           s.transport_seconds));
+      rr.aravis = run_aravis(s, fps, dir);
+      progress(fmt::format("{:.0f} fps: transport alone, ZeroMQ round trip ({} s)", fps,
+                           s.transport_seconds));
+      rr.zmq = run_zmq(s, fps, rr.pipe.frame_bytes_p50, rr.pipe.command_bytes_p50, self, dir);
+    }
+    all["rates"].push_back(result_json(rr));
+    results.push_back(std::move(rr));
+    util::write_file_atomic(s.out / "latency.json", all.dump(2) + "\n");
+  }
+  print_tables(results, s);
+  progress(fmt::format("wrote {}", (s.out / "latency.json").string()));
+  if (s.plot) {
+    write_plot(results, s.out / "latency.png");
+    progress(fmt::format("wrote {}", (s.out / "latency.png").string()));
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace tactile::bench
+
+int main(int argc, char** argv) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  // Hidden role: the echo end of the ZeroMQ round trip (started by the benchmark itself).
+  if (argc == 5 && std::string(argv[1]) == "--zmq-echo") {
+    try {
+      return tactile::bench::zmq_echo(argv[2], argv[3], std::stoul(argv[4]));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "zmq-echo: %s\n", e.what());
+      return 1;
+    }
+  }
+  tactile::bench::Settings s;
+  // build/bench/system/<this program>: the build directory is three levels up.
+  if (!ec) s.build_dir = self.parent_path().parent_path().parent_path();
+  s.scenario = fs::path(TACTILE_SOURCE_DIR) / "rig" / "scenarios" / "default.yaml";
+  CLI::App app(
+      "tactile_system_latency_bench: latency and load of the whole system (docs/benchmarks.md, "
+      "\"Latency and load\").\nFor each rate, with two cameras, in a private loopback network "
+      "namespace: the real rig (real time), sensor_node and hand_node as processes, then the "
+      "transport alone (the rig's fake GigE Vision cameras to a plain Aravis receiver; a ZeroMQ "
+      "PUB/SUB + DEALER/ROUTER round trip). Prints tables, writes OUT/latency.json and "
+      "OUT/latency.png, the programs' logs and configurations under OUT/<fps>fps/.");
+  app.add_option("--fps", s.rates, "frame rates, both cameras")
+      ->delimiter(',')
+      ->check(CLI::Range(1.0, 1000.0))
+      ->capture_default_str();
+  app.add_option("--seconds", s.seconds, "measured wall time per rate, after the task started")
+      ->check(CLI::Range(1.0, 3600.0))
+      ->capture_default_str();
+  app.add_option("--warmup", s.warmup_s, "unmeasured time after the task started (s)")
+      ->check(CLI::Range(0.0, 600.0))
+      ->capture_default_str();
+  app.add_option("--transport-seconds", s.transport_seconds,
+                 "measured wall time of each transport-alone run")
+      ->check(CLI::Range(1.0, 3600.0))
+      ->capture_default_str();
+  app.add_option("--start-timeout", s.start_timeout_s, "give up when the task has not started (s)")
+      ->check(CLI::Range(1.0, 600.0))
+      ->capture_default_str();
+  app.add_option("--build", s.build_dir,
+                 "build directory holding rig/rig, sensor_node/sensor_node "
+                 "and hand_node/hand_node")
+      ->capture_default_str();
+  app.add_option("--scenario", s.scenario, "scenario file; its camera fps is replaced by each rate")
+      ->check(CLI::ExistingFile)
+      ->capture_default_str();
+  app.add_option("--out", s.out, "output directory")->capture_default_str();
+  app.add_flag("!--no-plot", s.plot, "do not write latency.png");
+  app.add_flag("--skip-transport", s.skip_transport, "only the pipeline, not the transport alone");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "tactile_system_latency_bench: %s (see --help)\n", e.what());
+    return 2;
+  }
+  try {
+    return tactile::bench::run(s, self);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tactile_system_latency_bench: %s\n", e.what());
+    return 1;
+  }
+}
