@@ -70,7 +70,7 @@ struct Settings {
   double start_timeout_s = 60.0;    // for the task to start
   fs::path build_dir;
   fs::path scenario;
-  fs::path out = "bench-out/latency";
+  fs::path out = "out/latency";
   bool plot = true;
   bool skip_transport = false;
 };
@@ -225,20 +225,37 @@ double cpu_seconds(pid_t pid) {
   return static_cast<double>(utime + stime) / static_cast<double>(::sysconf(_SC_CLK_TCK));
 }
 
+// CPU of processes over a window; sampled now and then, so that a process that ends before the
+// window does (the task finished) is still measured up to its last sample.
 struct CpuWindow {
   std::map<std::string, double> start;
+  std::map<std::string, double> last;
+  std::map<std::string, std::int64_t> last_ns;
   std::int64_t start_ns = 0;
   void begin(const std::map<std::string, pid_t>& pids) {
-    for (const auto& [name, pid] : pids)
-      start[name] = cpu_seconds(pid);
     start_ns = util::monotonic_ns();
+    for (const auto& [name, pid] : pids) {
+      start[name] = last[name] = cpu_seconds(pid);
+      last_ns[name] = start_ns;
+    }
   }
-  // Percent of one core per process over the window.
-  std::map<std::string, double> end(const std::map<std::string, pid_t>& pids) const {
-    const double wall = static_cast<double>(util::monotonic_ns() - start_ns) * 1e-9;
+  void sample(const std::map<std::string, pid_t>& pids) {
+    const std::int64_t now = util::monotonic_ns();
+    for (const auto& [name, pid] : pids) {
+      const double v = cpu_seconds(pid);
+      if (!std::isfinite(v)) continue;  // gone
+      last[name] = v;
+      last_ns[name] = now;
+    }
+  }
+  // Percent of one core per process, from the start to its last sample.
+  std::map<std::string, double> end(const std::map<std::string, pid_t>& pids) {
+    sample(pids);
     std::map<std::string, double> pct;
-    for (const auto& [name, pid] : pids)
-      pct[name] = 100.0 * (cpu_seconds(pid) - start.at(name)) / wall;
+    for (const auto& [name, pid] : pids) {
+      const double wall = static_cast<double>(last_ns[name] - start_ns) * 1e-9;
+      if (wall > 0.5) pct[name] = 100.0 * (last[name] - start[name]) / wall;
+    }
     return pct;
   }
 };
@@ -293,7 +310,11 @@ struct PipelineResult {
   std::string rig_counters;
   Dist e2e;  // from the report: p50, p99, max; n = the commands' answers (unknown: 0)
   // Stages, in the measured window.
-  Dist gige;               // camera timestamp -> sensor_node received the frame's last packet
+  Dist gige;  // camera timestamp -> sensor_node received the frame's last packet
+  // Frames received before their camera timestamp: the timestamps do not say when the frame was
+  // sent (the rig renders render_lead_s before the send instant; above 1/render_lead_s frames
+  // per second the fake camera sends the image a period early), so latencies are not valid.
+  std::uint64_t gige_negative = 0;
   Dist measure;            // received -> handed to ZeroMQ (measurement and encoding)
   Dist measure_core;       // the measurement core alone (TactileFrame.measure_time_us)
   Dist pub_recv;           // sensor_node published -> hand_node received
@@ -322,6 +343,12 @@ struct PipelineResult {
   std::uint64_t true_slip_episodes = 0;     // per fingertip, whole run
   Dist cam_to_send_all_run;                 // every answer, whole run (the rig's samples)
   json recompress_detail = json::array();
+  json incomplete_run = json::array();  // every frame neither whole nor a reference frame
+  double max_camera_gap_ms = 0;         // between consecutive whole frames of a sensor
+  double max_publish_gap_ms = 0;
+  std::uint64_t camera_gaps_over_stale = 0;  // longer than three frame periods
+  std::uint64_t publish_gaps_over_stale = 0;
+  json long_gaps = json::array();
   std::map<std::string, std::uint64_t> events;
 };
 
@@ -450,15 +477,22 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
   const std::int64_t w0 = util::realtime_ns();
   const std::int64_t m0 = util::monotonic_ns();
   progress(fmt::format("{:.0f} fps: task started; measuring {} s", fps, s.seconds));
-  capture_until(sub, cap, m0 + static_cast<std::int64_t>(s.seconds * 1e9), children, {});
+  std::int64_t sampled = m0;
+  capture_until(sub, cap, m0 + static_cast<std::int64_t>(s.seconds * 1e9), children, [&] {
+    if (util::monotonic_ns() - sampled > 250'000'000) {
+      cpu.sample(pids);
+      sampled = util::monotonic_ns();
+    }
+    return false;
+  });
   const bool all_running = rig_p.running() && sensor_p.running() && hand_p.running();
-  if (all_running) r.cpu = cpu.end(pids);
+  r.cpu = cpu.end(pids);
   const std::int64_t w1 = util::realtime_ns();
   r.window_s = static_cast<double>(w1 - w0) * 1e-9;
   if (util::stop_requested()) fail("interrupted");
   if (!all_running) {
-    // The task may end (DONE, then the rig stops) before the window does: that is a result,
-    // but the CPU of a process that is gone cannot be read.
+    // The task may end (DONE or a drop, then the rig stops) before the window does: that is a
+    // result; CPU is then over the time up to each process's last sample.
     r.task_ended_early = true;
     if (rig_p.running()) fail(fmt::format("{:.0f} fps: a program stopped during the run", fps));
     progress(
@@ -511,6 +545,11 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
                    f.measure_time_us(),
                    f.frames_skipped()};
       frames[{fi.sensor, fi.sequence}] = fi;
+      if (fi.status != v1::FRAME_STATUS_COMPLETE && fi.status != v1::FRAME_STATUS_NO_REFERENCE)
+        r.incomplete_run.push_back({{"sensor_id", fi.sensor},
+                                    {"sequence", fi.sequence},
+                                    {"status", v1::FrameStatus_Name(fi.status)},
+                                    {"in_window", in_window}});
       auto [it, fresh] = last_seq.try_emplace(fi.sensor, fi.sequence);
       if (!fresh) {
         if (in_window && fi.sequence > it->second + 1)
@@ -561,6 +600,33 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
     core.push_back(f.measure_us * 1e-3);
   }
   r.gige = dist(gige);
+  // Gaps between consecutive published frames of a sensor, against hand_node's staleness limit
+  // (three frame periods, as rig --write-configs sets it): in camera time and in publish time.
+  {
+    const auto stale_ns = static_cast<std::int64_t>(3e9 / fps);
+    std::map<std::string, std::pair<std::int64_t, std::int64_t>> prev;  // camera, publish
+    for (const auto& [key, f] : frames) {
+      if (f.status != v1::FRAME_STATUS_COMPLETE || f.camera_ns < w0 || f.camera_ns > w1) continue;
+      auto [it, first] = prev.try_emplace(f.sensor, f.camera_ns, f.publish_ns);
+      if (!first) {
+        const std::int64_t cam_gap = f.camera_ns - it->second.first;
+        const std::int64_t pub_gap = f.publish_ns - it->second.second;
+        r.max_camera_gap_ms = std::max(r.max_camera_gap_ms, static_cast<double>(cam_gap) * 1e-6);
+        r.max_publish_gap_ms = std::max(r.max_publish_gap_ms, static_cast<double>(pub_gap) * 1e-6);
+        if (cam_gap > stale_ns) {
+          ++r.camera_gaps_over_stale;
+          r.long_gaps.push_back({{"sensor_id", f.sensor},
+                                 {"after_camera_timestamp_ns", it->second.first},
+                                 {"camera_gap_ms", static_cast<double>(cam_gap) * 1e-6},
+                                 {"publish_gap_ms", static_cast<double>(pub_gap) * 1e-6}});
+        }
+        if (pub_gap > stale_ns) ++r.publish_gaps_over_stale;
+        it->second = {f.camera_ns, f.publish_ns};
+      }
+    }
+  }
+  r.gige_negative = static_cast<std::uint64_t>(
+      std::count_if(gige.begin(), gige.end(), [](double x) { return x < 0; }));
   r.measure = dist(measure);
   r.measure_core = dist(core);
 
@@ -685,7 +751,8 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
 // The transport alone
 
 struct AravisResult {
-  Dist latency;  // camera timestamp -> receive_timestamp_ns, whole frames
+  Dist latency;                // camera timestamp -> receive_timestamp_ns, whole frames
+  std::uint64_t negative = 0;  // received before the camera timestamp (see gige_negative)
   std::uint64_t frames = 0;
   std::uint64_t complete = 0;
   std::uint64_t lost = 0;
@@ -769,6 +836,8 @@ AravisResult run_aravis(const Settings& s, double fps, const fs::path& dir) {
   std::vector<double> both = lat[0];
   both.insert(both.end(), lat[1].begin(), lat[1].end());
   r.latency = dist(both);
+  r.negative = static_cast<std::uint64_t>(
+      std::count_if(both.begin(), both.end(), [](double x) { return x < 0; }));
   for (const AravisResult& c : counts) {
     r.frames += c.frames;
     r.complete += c.complete;
@@ -909,6 +978,7 @@ json result_json(const RateResult& rr) {
   j["task_ended_early"] = p.task_ended_early;
   j["load_average_at_start"] = p.load_at_start;
   j["end_to_end_rig_report"] = to_json(p.e2e);
+  j["gige_received_before_camera_timestamp"] = p.gige_negative;
   j["stages"] = {
       {"gige_receive", to_json(p.gige)},
       {"measure_and_publish", to_json(p.measure)},
@@ -935,6 +1005,12 @@ json result_json(const RateResult& rr) {
   j["recompress_without_true_onset_within_3_periods"] = p.recompress_no_onset;
   j["true_slip_episodes"] = p.true_slip_episodes;
   j["recompress_detail"] = p.recompress_detail;
+  j["incomplete_frames_whole_run"] = p.incomplete_run;
+  j["frame_gaps"] = {{"max_camera_timestamp_gap_ms", p.max_camera_gap_ms},
+                     {"max_publish_gap_ms", p.max_publish_gap_ms},
+                     {"camera_gaps_over_3_periods", p.camera_gaps_over_stale},
+                     {"publish_gaps_over_3_periods", p.publish_gaps_over_stale},
+                     {"camera_gaps_over_3_periods_list", p.long_gaps}};
   j["camera_to_command_sent_all_answers_whole_run"] = to_json(p.cam_to_send_all_run);
   j["events"] = p.events;
   j["rig_report"] = p.report;
@@ -942,6 +1018,7 @@ json result_json(const RateResult& rr) {
   if (rr.aravis) {
     const AravisResult& a = *rr.aravis;
     j["transport"]["aravis_receive"] = to_json(a.latency);
+    j["transport"]["aravis_received_before_camera_timestamp"] = a.negative;
     j["transport"]["aravis_frames"] = {
         {"received", a.frames}, {"complete", a.complete}, {"lost", a.lost}};
     j["transport"]["aravis_receiver_cpu_percent"] = a.receiver_cpu;
@@ -993,20 +1070,25 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
       "\nFrames and faults in the window (e2e samples: whole run, one per answer of every "
       "command):\n\n"
       "| fps | window s | TactileFrames | complete | incomplete | camera frames lost | missed by "
-      "the benchmark | commands | e2e samples | STALE_HOLD events (run) | rig |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "the benchmark | gaps > 3 periods, camera / publish (max ms) | commands | e2e samples | "
+      "STALE_HOLD events (run) | rig |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const RateResult& rr : rs) {
     const PipelineResult& p = rr.pipe;
     const auto stale = p.events.find("EVENT_KIND_STALE_HOLD");
-    std::printf("| %.0f | %.1f | %llu | %llu | %llu | %llu | %llu | %llu | %zu | %llu | %s |\n",
-                p.fps, p.window_s, static_cast<unsigned long long>(p.frames),
-                static_cast<unsigned long long>(p.frames_complete),
-                static_cast<unsigned long long>(p.frames_incomplete),
-                static_cast<unsigned long long>(p.frames_skipped),
-                static_cast<unsigned long long>(p.sequence_gaps),
-                static_cast<unsigned long long>(p.commands), p.e2e.n,
-                static_cast<unsigned long long>(stale == p.events.end() ? 0 : stale->second),
-                p.rig_counters.c_str());
+    std::printf(
+        "| %.0f | %.1f | %llu | %llu | %llu | %llu | %llu | %llu / %llu (%.1f / %.1f) | %llu | %zu "
+        "| %llu | %s |\n",
+        p.fps, p.window_s, static_cast<unsigned long long>(p.frames),
+        static_cast<unsigned long long>(p.frames_complete),
+        static_cast<unsigned long long>(p.frames_incomplete),
+        static_cast<unsigned long long>(p.frames_skipped),
+        static_cast<unsigned long long>(p.sequence_gaps),
+        static_cast<unsigned long long>(p.camera_gaps_over_stale),
+        static_cast<unsigned long long>(p.publish_gaps_over_stale), p.max_camera_gap_ms,
+        p.max_publish_gap_ms, static_cast<unsigned long long>(p.commands), p.e2e.n,
+        static_cast<unsigned long long>(stale == p.events.end() ? 0 : stale->second),
+        p.rig_counters.c_str());
   }
   std::printf(
       "\nStages, p50 / p99 (ms):\n\n"
@@ -1061,24 +1143,82 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
                 ms(lo, 2).c_str(), ms(d.p50, 2).c_str(), ms(d.max, 2).c_str(),
                 2000.0 / p.fps + 1.0);
   }
+  for (const RateResult& rr : rs) {
+    const PipelineResult& p = rr.pipe;
+    const std::uint64_t ahead = p.gige_negative + (rr.aravis ? rr.aravis->negative : 0);
+    const double total = static_cast<double>(p.gige.n + (rr.aravis ? rr.aravis->latency.n : 0));
+    if (ahead > 0) {
+      std::printf(
+          "\nWARNING %.0f fps: %llu of %.0f frames (%.2f %%) arrived before their camera timestamp "
+          "(pipeline %llu, transport alone %llu): the rig published those images earlier than "
+          "their timestamps say (a late camera thread sends the newest image, rendered "
+          "render_lead_s ahead; above 1/render_lead_s fps every image goes a period early). %s\n",
+          p.fps, static_cast<unsigned long long>(ahead), total,
+          100.0 * static_cast<double>(ahead) / total,
+          static_cast<unsigned long long>(p.gige_negative),
+          static_cast<unsigned long long>(rr.aravis ? rr.aravis->negative : 0),
+          static_cast<double>(ahead) > 0.01 * total
+              ? "Latencies at this rate are NOT valid."
+              : "Rare: latencies stand, their tails slightly understated.");
+    }
+  }
+  for (const RateResult& rr : rs) {
+    const PipelineResult& p = rr.pipe;
+    if (std::abs(p.fps - 200.0) > 1e-9) continue;
+    const auto verdict = [](bool measured, bool ok) {
+      return !measured ? "not measured" : ok ? "met" : "NOT met";
+    };
+    std::printf(
+        "\nTargets (two cameras, 200 fps):\n\n| target | measured | verdict |\n|---|---|---|\n");
+    std::printf("| end to end p50 <= 1 ms | %s ms | %s |\n", ms(p.e2e.p50).c_str(),
+                verdict(std::isfinite(p.e2e.p50), p.e2e.p50 <= 1.0));
+    std::printf("| end to end p99 <= 3 ms (max reported) | %s ms (max %s ms) | %s |\n",
+                ms(p.e2e.p99).c_str(), ms(p.e2e.max).c_str(),
+                verdict(std::isfinite(p.e2e.p99), p.e2e.p99 <= 3.0));
+    std::smatch m;
+    long long rig_incomplete = -1;
+    const std::regex re("incomplete ([0-9]+)");
+    if (std::regex_search(p.rig_counters, m, re)) rig_incomplete = std::stoll(m[1].str());
+    std::printf("| no incomplete frames | %llu in the window; %s in the whole run (rig) | %s |\n",
+                static_cast<unsigned long long>(p.frames_incomplete),
+                rig_incomplete < 0 ? "?" : std::to_string(rig_incomplete).c_str(),
+                verdict(true, p.frames_incomplete == 0 && rig_incomplete == 0));
+    if (rr.aravis && rr.zmq) {
+      const double added = p.e2e.p50 - (rr.aravis->latency.p50 + rr.zmq->round_trip.p50);
+      std::printf("| pipeline adds <= 0.150 ms at p50 over the transport alone | %s ms | %s |\n",
+                  ms(added).c_str(), verdict(std::isfinite(added), added <= 0.150));
+    }
+    const bool cpu_known = p.cpu.count("sensor_node") > 0;
+    std::printf("| sensor_node <= 25 %% of one core | %s | %s |\n",
+                cpu_known ? fmt::format("{:.1f} %", p.cpu.at("sensor_node")).c_str() : "-",
+                verdict(cpu_known, cpu_known && p.cpu.at("sensor_node") <= 25.0));
+    const Dist d = dist(p.slip_to_recompress_ms);
+    std::printf("| slip onset -> re-compress command <= 2 periods + 1 ms (%.1f ms) | %s | %s |\n",
+                2000.0 / p.fps + 1.0,
+                d.n > 0 ? fmt::format("max {} ms over {}", ms(d.max, 2), d.n).c_str()
+                        : "no re-compression near a true onset",
+                verdict(d.n > 0, d.max <= 2000.0 / p.fps + 1.0));
+  }
   std::fflush(stdout);
 }
 
 void write_plot(const std::vector<RateResult>& rs, const fs::path& path) {
-  plot::Figure fig(900, 520);
-  fig.title("camera timestamp -> ArmCommand sent (freshest answered frame)");
-  auto& panel = fig.add_panel();
-  panel.x_label("latency [ms]").y_label("commands");
+  plot::Figure fig(900, 220 * static_cast<int>(std::max<std::size_t>(rs.size(), 1)) + 80);
+  fig.title("camera timestamp -> ArmCommand sent (freshest answered frame), two cameras");
+  fig.share_x();
   double hi = 0;
   for (const RateResult& rr : rs) {
     const auto& v = rr.pipe.cam_to_send_fresh_samples;
     if (!v.empty()) hi = std::max(hi, percentile(v, 0.99));
   }
   if (hi <= 0) return;
-  for (const RateResult& rr : rs) {
+  for (std::size_t i = 0; i < rs.size(); ++i) {
+    auto& panel = fig.add_panel();
+    panel.x_label("latency [ms], up to the largest p99").y_label("commands");
     plot::Style st;
-    panel.histogram(rr.pipe.cam_to_send_fresh_samples, 60, fmt::format("{:.0f} fps", rr.pipe.fps),
-                    st, 0.0, hi);
+    st.color = plot::palette(i);
+    panel.histogram(rs[i].pipe.cam_to_send_fresh_samples, 60,
+                    fmt::format("{:.0f} fps", rs[i].pipe.fps), st, 0.0, hi);
   }
   fig.save_png(path);
 }
