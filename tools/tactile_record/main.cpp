@@ -32,7 +32,9 @@ struct Options {
   std::vector<std::string> curve;
   std::string client_key;
   std::string output;
-  std::vector<std::string> topics{"frame/", "stats/", "event", "truth"};
+  // Everything but raw frames: sensors, hand_node (events, the ArmStates it received, the
+  // ArmCommands it sent) and the rig's truth.
+  std::vector<std::string> topics{"frame/", "stats/", "event", "arm", "command", "truth"};
   bool raw_frames = false;
   double duration_s = 0;
   std::uint64_t count = 0;
