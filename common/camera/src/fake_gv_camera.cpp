@@ -3,6 +3,7 @@
 #include <arpa/inet.h>
 #include <fmt/core.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -11,6 +12,7 @@
 #include <bit>
 #include <cerrno>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <mutex>
 #include <stdexcept>
@@ -19,6 +21,30 @@
 #include "aravis_support.hpp"
 #include "tactile/camera/private_network.hpp"
 #include "tactile/util/clock.hpp"
+
+namespace tactile::camera {
+namespace {
+// The frame period (ms) of the fake camera whose thread this is; 0 on every other thread.
+thread_local int t_fake_camera_period_ms = 0;
+}  // namespace
+}  // namespace tactile::camera
+
+// Aravis 0.8.26's ArvGvFakeCamera thread computes its poll timeout as
+// (guint64 next_timestamp_us - g_get_real_time ()) / 1000, clamped to 0..100 ms: when the frame
+// time passes between its loop test and that line (it spins on poll(0) through the last
+// millisecond before each frame) the unsigned difference wraps and the camera waits 100 ms
+// before the frame; about one frame in a hundred on a busy machine (upstream pull request 1089).
+// This program's g_poll is found before GLib's (the dynamic linker looks in the executable
+// first) and is GLib's own on Linux, poll(2), with one change on a fake camera's thread: while
+// it streams, a wait longer than its frame period can only be that wrap, and is not waited.
+static_assert(sizeof(GPollFD) == sizeof(pollfd) && offsetof(GPollFD, revents) ==
+                                                       offsetof(pollfd, revents),
+              "g_poll passes GPollFD to poll(2) as GLib does on Linux");
+extern "C" gint g_poll(GPollFD* fds, guint nfds, gint timeout) {
+  const int period_ms = tactile::camera::t_fake_camera_period_ms;
+  if (period_ms > 0 && timeout > period_ms) timeout = 0;
+  return ::poll(reinterpret_cast<pollfd*>(fds), nfds, timeout);
+}
 
 namespace tactile::camera {
 
@@ -105,6 +131,15 @@ struct FakeGvCamera::Impl {
                    guint32 /*gain*/, ArvPixelFormat pixel_format) {
     // Runs once per frame on the fake camera's only thread, which also answers GVCP: one copy.
     auto* self = static_cast<Impl*>(user_data);
+    // This thread streams at the camera's period (see g_poll above). The register, not the
+    // options: a client may change the frame rate.
+    guint32 period_us = 0;
+    if (self->camera &&
+        arv_fake_camera_read_register(arv_gv_fake_camera_get_fake_camera(self->camera.get()),
+                                      ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
+                                      &period_us)) {
+      t_fake_camera_period_ms = static_cast<int>(period_us / 1000);
+    }
     SentFrame sent;
     sent.block_id = arv_buffer_get_frame_id(buffer);
     sent.fill_time_ns = util::realtime_ns();
