@@ -286,8 +286,15 @@ TruthReport check_against_truth(const std::vector<v1::TactileFrame>& frames,
     }
     const std::uint64_t skipped = step.late || step.first_after_start ? 0 : step.frames_lost;
     if (i > 0 && f.frames_skipped() != skipped) {
-      fail(fmt::format("{}: frames_skipped {}, the block ids say {}", where, f.frames_skipped(),
-                       skipped));
+      // The frames before it, to tell which arrival order the two sides disagree on.
+      std::string before;
+      for (std::size_t j = i >= 4 ? i - 4 : 0; j < i; ++j) {
+        before += fmt::format(" [seq {} block {} {} skipped {}]", frames[j].sequence(),
+                              frames[j].camera_frame_id(), v1::FrameStatus_Name(frames[j].status()),
+                              frames[j].frames_skipped());
+      }
+      fail(fmt::format("{}: frames_skipped {}, the block ids say {}; before it:{}", where,
+                       f.frames_skipped(), skipped, before));
     }
     r.frames_lost += f.frames_skipped();
     ++r.statuses[f.status()];

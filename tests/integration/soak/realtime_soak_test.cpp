@@ -1,0 +1,217 @@
+// Soak in real time (docs/reliability.md, "Soak"): one sensor_node runs for ten minutes while
+// the rig and hand_node perform the paper's task again and again (the rig's cameras go away
+// between runs and sensor_node reopens them). Checked: every run completes; sensor_node's
+// memory stays within a bound measured after the first run; latency does not drift; every
+// camera frame gives exactly one TactileFrame and none is lost on the way (sequence numbers
+// without gaps, each interval's SensorStats matching the frames that came). Runs in a private
+// network namespace (127.0.0.2 and 127.0.0.3 on lo). TACTILE_SOAK_REALTIME_S overrides the
+// wall time (s).
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "process.hpp"
+#include "tactile/wire/envelope.hpp"
+#include "tactile/wire/sockets.hpp"
+
+namespace tactile {
+namespace {
+
+using namespace std::chrono_literals;
+using nlohmann::json;
+using testing::Process;
+using testing::TempDir;
+
+long resident_kb(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+  }
+  return -1;
+}
+
+double soak_s() {
+  const char* v = std::getenv("TACTILE_SOAK_REALTIME_S");
+  return v != nullptr ? std::stod(v) : 600.0;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// What the test sees of one sensor's stream.
+struct Stream {
+  std::uint64_t frames = 0;  // TactileFrames received
+  std::uint64_t gaps = 0;    // sequence numbers skipped
+  std::optional<std::uint64_t> last_sequence;
+  // The previous SensorStats and the frames received when it came.
+  std::optional<v1::SensorStats> last_stats;
+  std::uint64_t frames_at_last_stats = 0;
+  std::uint64_t intervals_checked = 0;
+  std::uint64_t interval_mismatches = 0;  // other than the one below
+  std::uint64_t one_more_frame = 0;       // one TactileFrame more than camera frames
+  std::string first_mismatch;
+};
+
+TEST(RealtimeSoak, TenMinutesOfRunsMemoryBoundedLatencySteadyCountersAddUp) {
+  const std::string scenario = std::string(TACTILE_SOURCE_DIR) + "/tests/data/scenarios/quick.yaml";
+  TempDir dir;
+  const auto config = dir / "config";
+  {
+    const auto r = testing::run(
+        {TACTILE_RIG_PATH, "--scenario", scenario, "--write-configs", config.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  zmq::context_t ctx;
+  wire::Subscriber sub(ctx, {"tcp://127.0.0.1:5555"}, {"frame/", "stats/"});
+  Process sensor({TACTILE_SENSOR_NODE_PATH, "--config", (config / "sensor_node.yaml").string()});
+
+  std::map<std::string, Stream> streams;
+  wire::TopicMessage m;
+  v1::Envelope env;
+  const auto drain = [&](std::chrono::milliseconds timeout) {
+    if (!sub.receive(m, timeout)) return;
+    do {
+      if (wire::decode(m.payload, env) != wire::DecodeStatus::kOk) {
+        ADD_FAILURE() << "sensor_node sent an undecodable message on " << m.topic;
+        continue;
+      }
+      if (env.has_tactile_frame()) {
+        Stream& s = streams[env.tactile_frame().sensor_id()];
+        const std::uint64_t seq = env.tactile_frame().sequence();
+        if (s.last_sequence && seq != *s.last_sequence + 1) {
+          s.gaps += seq > *s.last_sequence ? seq - *s.last_sequence - 1 : 1;
+        }
+        s.last_sequence = seq;
+        ++s.frames;
+      } else if (env.has_sensor_stats()) {
+        const v1::SensorStats& st = env.sensor_stats();
+        Stream& s = streams[st.sensor_id()];
+        EXPECT_EQ(st.frames(), st.frames_complete() + st.frames_incomplete())
+            << st.sensor_id() << ": the counters do not add up";
+        // Over an interval without a camera restart, the camera's frame count rose by exactly
+        // the TactileFrames that came (one per camera frame, none lost on the way).
+        if (s.last_stats && s.last_stats->camera_restarts() == st.camera_restarts() &&
+            st.frames() >= s.last_stats->frames()) {
+          ++s.intervals_checked;
+          const std::uint64_t counted = st.frames() - s.last_stats->frames();
+          const std::uint64_t came = s.frames - s.frames_at_last_stats;
+          if (came == counted + 1) {
+            // Seen once per camera reopen (docs/reliability.md, "Soak"): bounded below.
+            ++s.one_more_frame;
+          } else if (counted != came) {
+            if (s.interval_mismatches++ == 0) {
+              s.first_mismatch = st.sensor_id() + ": camera frames " + std::to_string(counted) +
+                                 ", TactileFrames " + std::to_string(came);
+            }
+          }
+        }
+        s.last_stats = st;
+        s.frames_at_last_stats = s.frames;
+      }
+    } while (sub.receive(m, 0ms));
+  };
+
+  const auto start = std::chrono::steady_clock::now();
+  const double limit_s = soak_s();
+  int runs = 0;
+  long rss_first = -1;
+  long rss_max = 0;
+  std::vector<double> p50s, p99s;
+  while (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() <
+         limit_s) {
+    ++runs;
+    const auto report_path = dir / ("run-" + std::to_string(runs) + ".json");
+    Process rig({TACTILE_RIG_PATH, "--scenario", scenario, "--report", report_path.string()});
+    Process hand({TACTILE_HAND_NODE_PATH, "--config", (config / "hand_node.yaml").string()});
+    const auto run_deadline = std::chrono::steady_clock::now() + 150s;
+    while (hand.running() && std::chrono::steady_clock::now() < run_deadline)
+      drain(50ms);
+    const auto hr = hand.wait(5s);
+    ASSERT_FALSE(hr.timed_out) << "run " << runs << ": hand_node still running\n"
+                               << hr.err << "\n--- rig\n"
+                               << rig.err_so_far();
+    ASSERT_EQ(hr.exit_code, 0) << "run " << runs << "\n"
+                               << hr.err << "\n--- rig\n"
+                               << rig.err_so_far();
+    while (rig.running() && std::chrono::steady_clock::now() < run_deadline + 60s)
+      drain(50ms);
+    const auto rr = rig.wait(5s);
+    ASSERT_EQ(rr.exit_code, 0) << "run " << runs << "\n" << rr.err;
+    ASSERT_TRUE(sensor.running()) << sensor.err_so_far();
+
+    std::ifstream in(report_path);
+    const json r = json::parse(in);
+    ASSERT_EQ(r["completed"], true) << "run " << runs << ": " << r.dump();
+    EXPECT_EQ(r["dropped"], false) << "run " << runs << ": " << r.dump();
+    EXPECT_EQ(r["tightened_cycle"], r["true_tight_cycle"]) << "run " << runs << ": " << r.dump();
+    ASSERT_TRUE(r["latency_ms"].is_object()) << r.dump();
+    p50s.push_back(r["latency_ms"]["p50"].get<double>());
+    p99s.push_back(r["latency_ms"]["p99"].get<double>());
+
+    const long rss = resident_kb(sensor.pid());
+    ASSERT_GT(rss, 0);
+    if (runs == 1) rss_first = rss;
+    rss_max = std::max(rss_max, rss);
+    // Bound measured on this machine: sensor_node's resident set after the first run plus
+    // 16 MiB (later runs stayed within a few hundred kB of it; docs/reliability.md).
+    EXPECT_LE(rss, rss_first + 16 * 1024) << "run " << runs << ": sensor_node resident " << rss
+                                          << " kB, after run 1 " << rss_first << " kB";
+    std::fprintf(stderr,
+                 "[soak] run %d at %.0f s: latency p50 %.2f ms p99 %.2f ms; sensor_node resident "
+                 "%ld kB\n",
+                 runs,
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                 p50s.back(), p99s.back(), rss);
+  }
+  drain(200ms);
+  sensor.signal(SIGINT);
+  const auto sr = sensor.wait(20s);
+  EXPECT_EQ(sr.exit_code, 0) << sr.err;
+
+  ASSERT_GE(runs, 2);
+  // Latency does not drift: the later runs' median p50 stays within three times the earlier
+  // runs' plus 2 ms, and no run's p99 reaches 100 ms. Coarse on purpose: the machine is shared
+  // and its load changes the level (p50 2.5 to 6 ms was seen with a build starting beside the
+  // test); what this catches is growth that does not stop (a queue filling, a leak slowing the
+  // loop), which these bounds leave no room for over ten minutes.
+  const std::size_t half = p50s.size() / 2;
+  const double early = median({p50s.begin(), p50s.begin() + static_cast<long>(half)});
+  const double late = median({p50s.begin() + static_cast<long>(half), p50s.end()});
+  EXPECT_LE(late, 3.0 * early + 2.0) << "latency p50 went from " << early << " to " << late;
+  EXPECT_LT(*std::max_element(p99s.begin(), p99s.end()), 100.0);
+  for (const auto& [id, s] : streams) {
+    EXPECT_EQ(s.gaps, 0U) << id << ": TactileFrames lost between sensor_node and the test";
+    EXPECT_GT(s.intervals_checked, 10U) << id;
+    EXPECT_EQ(s.interval_mismatches, 0U) << s.first_mismatch;
+    ASSERT_TRUE(s.last_stats);
+    EXPECT_LE(s.one_more_frame, s.last_stats->camera_restarts())
+        << id << ": one TactileFrame more than camera frames in more intervals than reopens";
+    std::fprintf(stderr,
+                 "[soak] %s: %llu TactileFrames, %llu stats intervals checked, %llu with one "
+                 "TactileFrame more than camera frames, %llu camera restarts\n",
+                 id.c_str(), static_cast<unsigned long long>(s.frames),
+                 static_cast<unsigned long long>(s.intervals_checked),
+                 static_cast<unsigned long long>(s.one_more_frame),
+                 static_cast<unsigned long long>(s.last_stats->camera_restarts()));
+  }
+  EXPECT_EQ(streams.size(), 2U);
+  std::fprintf(stderr,
+               "[soak] %d runs in %.0f s; latency p50 early %.2f ms late %.2f ms, worst p99 %.2f "
+               "ms; sensor_node resident after run 1 %ld kB, max %ld kB\n",
+               runs,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+               early, late, *std::max_element(p99s.begin(), p99s.end()), rss_first, rss_max);
+}
+
+}  // namespace
+}  // namespace tactile
