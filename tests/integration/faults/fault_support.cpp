@@ -285,7 +285,9 @@ TruthReport check_against_truth(const std::vector<v1::TactileFrame>& frames,
       if (f.status() == v1::FRAME_STATUS_COMPLETE) fail(where + ": COMPLETE with an old block id");
     }
     const std::uint64_t skipped = step.late || step.first_after_start ? 0 : step.frames_lost;
-    if (i > 0 && f.frames_skipped() != skipped) {
+    // The first identified frame the test saw has nothing to count from (the test may have
+    // joined late, or seen only frames without a block id before it).
+    if (!step.first_after_start && f.frames_skipped() != skipped) {
       // The frames before it, to tell which arrival order the two sides disagree on.
       std::string before;
       for (std::size_t j = i >= 4 ? i - 4 : 0; j < i; ++j) {
