@@ -10,120 +10,13 @@
 #include "tactile/control/config.hpp"
 #include "tactile/control/controller.hpp"
 #include "tactile/extractor.hpp"
+#include "tactile/rig/control_link.hpp"
 #include "tactile/rig/optics.hpp"
 #include "tactile/rig/world.hpp"
 #include "tactile/util/json.hpp"
 
 namespace tactile::rig {
 namespace {
-
-control::Config controller_config(const Scenario& sc) {
-  control::Config cfg;
-  cfg.cap_x_m = sc.world.cap.x_m;
-  cfg.cap_y_m = sc.world.cap.y_m;
-  cfg.bottle_x_m = sc.world.bottle.x_m;
-  cfg.bottle_y_m = sc.world.bottle.y_m;
-  cfg.tighten_clockwise = sc.world.bottle.tighten_clockwise;
-  for (const auto& [key, v] : sc.controller) {
-    const auto count = static_cast<std::uint32_t>(std::max(0.0, std::round(v)));
-    if (key == "f1_n")
-      cfg.f1_n = v;
-    else if (key == "f2_n")
-      cfg.f2_n = v;
-    else if (key == "dr_mm")
-      cfg.dr_mm = v;
-    else if (key == "twist_dr_factor")
-      cfg.twist_dr_factor = v;
-    else if (key == "approach_speed_mps")
-      cfg.approach_speed_mps = v;
-    else if (key == "recompress_gain_mps")
-      cfg.recompress_gain_mps = v;
-    else if (key == "recompress_duration_s")
-      cfg.recompress_duration_s = v;
-    else if (key == "backoff_speed_mps")
-      cfg.backoff_speed_mps = v;
-    else if (key == "max_finger_speed_mps")
-      cfg.max_finger_speed_mps = v;
-    else if (key == "safe_height_m")
-      cfg.safe_height_m = v;
-    else if (key == "grasp_height_m")
-      cfg.grasp_height_m = v;
-    else if (key == "carry_height_m")
-      cfg.carry_height_m = v;
-    else if (key == "lower_limit_m")
-      cfg.lower_limit_m = v;
-    else if (key == "retract_height_m")
-      cfg.retract_height_m = v;
-    else if (key == "move_speed_mps")
-      cfg.move_speed_mps = v;
-    else if (key == "lift_speed_mps")
-      cfg.lift_speed_mps = v;
-    else if (key == "carry_speed_mps")
-      cfg.carry_speed_mps = v;
-    else if (key == "lower_speed_mps")
-      cfg.lower_speed_mps = v;
-    else if (key == "max_yaw_rate_rps")
-      cfg.max_yaw_rate_rps = v;
-    else if (key == "twist_yaw_rate_rps")
-      cfg.twist_yaw_rate_rps = v;
-    else if (key == "grasp_settle_s")
-      cfg.grasp_settle_s = v;
-    else if (key == "open_speed_mps")
-      cfg.open_speed_mps = v;
-    else if (key == "open_distance_m")
-      cfg.open_distance_m = v;
-    else if (key == "open_settle_s")
-      cfg.open_settle_s = v;
-    else if (key == "twist_angle_deg")
-      cfg.twist_angle_rad = v * std::numbers::pi / 180.0;
-    else if (key == "ns")
-      cfg.ns = count;
-    else if (key == "cycle_slip_min")
-      cfg.cycle_slip_min = count;
-    else if (key == "max_twist_cycles")
-      cfg.max_twist_cycles = count;
-    else if (key == "search_timeout_s")
-      cfg.search_timeout_s = v;
-    else if (key == "segment_timeout_s")
-      cfg.segment_timeout_s = v;
-  }
-  cfg.validate();
-  return cfg;
-}
-
-ArmCommand to_arm_command(const control::Command& c) {
-  ArmCommand a;
-  switch (c.kind) {
-    case control::CommandKind::kNone:
-      a.kind = CommandKind::kNone;
-      break;
-    case control::CommandKind::kMoveTo:
-      a.kind = CommandKind::kMoveTo;
-      a.segment_id = c.move_to.segment_id;
-      a.target_position_m = c.move_to.target.position_m;
-      a.target_yaw_rad = c.move_to.target.yaw_rad;
-      a.max_speed_mps = c.move_to.max_speed_mps;
-      a.max_yaw_rate_rps = c.move_to.max_yaw_rate_rps;
-      a.keep_finger_velocities = c.move_to.keep_finger_velocities;
-      break;
-    case control::CommandKind::kFingerVelocities:
-      a.kind = CommandKind::kFingerVelocities;
-      a.finger_velocity_mps = c.finger_velocities.velocity_mps;
-      break;
-    case control::CommandKind::kHold:
-      a.kind = CommandKind::kHold;
-      break;
-    case control::CommandKind::kOpen:
-      a.kind = CommandKind::kOpen;
-      a.open_speed_mps = c.open.speed_mps;
-      a.open_distance_m = c.open.distance_m;
-      break;
-    case control::CommandKind::kStop:
-      a.kind = CommandKind::kStop;
-      break;
-  }
-  return a;
-}
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
@@ -154,7 +47,7 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   Report& rep = result.report;
   rep.seed = sc.seed;
 
-  const control::Config cfg = controller_config(sc);
+  const control::Config cfg = scenario_controller_config(sc);
   World world(sc.world);
   const int steps =
       opt.dt_s > 0 ? std::max(1, static_cast<int>(std::lround(1.0 / (sc.camera.fps * opt.dt_s))))
@@ -429,7 +322,7 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
       }
     }
 
-    world.apply(to_arm_command(out.command));
+    world.apply(to_world_command(out.command));
     phase = out.phase;
     rep.twist_cycles = static_cast<int>(
         std::max<std::uint32_t>(static_cast<std::uint32_t>(rep.twist_cycles), out.twist_cycle));

@@ -4,8 +4,6 @@
 #include <cmath>
 #include <string>
 
-#include "tactile/config/controller_file.hpp"
-
 namespace tactile::rig {
 namespace {
 
@@ -17,23 +15,6 @@ double percentile(std::vector<double> v, double q) {
 }
 
 }  // namespace
-
-control::Config scenario_controller_config(const Scenario& sc) {
-  control::Config cfg;
-  cfg.cap_x_m = sc.world.cap.x_m;
-  cfg.cap_y_m = sc.world.cap.y_m;
-  cfg.bottle_x_m = sc.world.bottle.x_m;
-  cfg.bottle_y_m = sc.world.bottle.y_m;
-  cfg.tighten_clockwise = sc.world.bottle.tighten_clockwise;
-  for (const auto& [key, v] : sc.controller) {
-    if (!config::set_controller_field(cfg, key, v)) {
-      throw std::invalid_argument(sc.source + ": controller." + key +
-                                  " is not a controller setting");
-    }
-  }
-  cfg.validate();
-  return cfg;
-}
 
 RunScorer::RunScorer(LockstepResult& run, const control::Config& cfg, bool record_series)
     : run_(run), cfg_(cfg), record_(record_series) {

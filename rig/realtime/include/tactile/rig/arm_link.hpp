@@ -4,14 +4,11 @@
 // ArmState. Pure conversions.
 #include <cstdint>
 
-#include "tactile/control/types.hpp"
+#include "tactile/rig/control_link.hpp"
 #include "tactile/rig/world.hpp"
 #include "tactile/wire/arm.hpp"
 
 namespace tactile::rig {
-
-// The arm command the world carries out for a control-core command.
-ArmCommand to_world_command(const control::Command& c);
 
 // The world's arm as an ArmState.
 wire::ArmStateData arm_state_of(const World& world, std::int64_t time_ns,

@@ -12,15 +12,12 @@
 #include "tactile/control/config.hpp"
 #include "tactile/control/types.hpp"
 #include "tactile/reading.hpp"
+#include "tactile/rig/control_link.hpp"
 #include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/scenario.hpp"
 #include "tactile/rig/truth.hpp"
 
 namespace tactile::rig {
-
-// The control core's configuration of a scenario: defaults, the scenario's cap and bottle, and
-// its `controller` overrides. Throws std::invalid_argument for an invalid result.
-control::Config scenario_controller_config(const Scenario& scenario);
 
 class RunScorer {
  public:
