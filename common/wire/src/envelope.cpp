@@ -1,5 +1,6 @@
 #include "tactile/wire/envelope.hpp"
 
+// SetLogHandler: public API of protobuf 3.21 (Debian bookworm), declared in this header.
 #include <google/protobuf/stubs/logging.h>
 
 #include <atomic>

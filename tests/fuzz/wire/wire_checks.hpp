@@ -1,6 +1,7 @@
 #pragma once
 
 // The promises of each wire decoder, checked on every input it accepts.
+// SetLogHandler (protobuf 3.21 declares it in this public header): silences protobuf's log.
 #include <google/protobuf/stubs/logging.h>
 
 #include <cmath>
