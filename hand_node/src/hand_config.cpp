@@ -12,7 +12,8 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
   if (warnings != nullptr) {
     for (const auto& k : root.unknown_keys({"format", "fingertips", "subscribe", "arm", "events",
                                             "heartbeat_period_s", "control_period_s",
-                                            "arm_timeout_s", "controller", "security"})) {
+                                            "arm_timeout_s", "pair_window_s", "controller",
+                                            "security"})) {
       warnings->push_back(path.string() + ": unknown key '" + k + "' ignored");
     }
   }
@@ -62,6 +63,12 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
   cfg.heartbeat_period_s = positive("heartbeat_period_s", cfg.heartbeat_period_s);
   cfg.control_period_s = positive("control_period_s", cfg.control_period_s);
   cfg.arm_timeout_s = positive("arm_timeout_s", cfg.arm_timeout_s);
+  cfg.pair_window_s = root.get("pair_window_s", cfg.pair_window_s);
+  if (!(cfg.pair_window_s >= 0 && cfg.pair_window_s <= 1)) {
+    root["pair_window_s"].fail("must be 0 (off) or a number of seconds up to 1 (keep it below half "
+                               "the frame period), is " +
+                               root["pair_window_s"].text());
+  }
   if (auto c = root.find("controller"))
     cfg.controller = config::parse_controller_config(*c, warnings);
   if (auto sec = root.find("security")) {

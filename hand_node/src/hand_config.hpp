@@ -31,6 +31,9 @@ struct HandConfig {
   double heartbeat_period_s = 0.1;  // a Heartbeat to the arm controller when idle this long
   double control_period_s = 0.005;  // the controller also runs this often without new frames
   double arm_timeout_s = 1.0;       // no ArmState for this long: the arm controller is gone
+  // A frame waits at most this long for the other fingertip's frame of the same exposure
+  // (camera timestamps this close); 0: the controller runs on every frame as it comes.
+  double pair_window_s = 0.002;
   control::Config controller;
   // CURVE on both links (docs/security.md); unset: plain TCP.
   std::optional<wire::ClientSecurity> sensor_security;  // SUB: the sensor_node's public key

@@ -27,7 +27,8 @@ HandNode::HandNode(HandConfig cfg, zmq::context_t& ctx)
       sub_(ctx, cfg_.subscribe, {"frame/" + ids_[0], "frame/" + ids_[1]},
            cfg_.sensor_security ? &*cfg_.sensor_security : nullptr),
       arm_(ctx, cfg_.arm, cfg_.arm_security ? &*cfg_.arm_security : nullptr),
-      controller_(cfg_.controller) {
+      controller_(cfg_.controller),
+      pairing_(seconds_to_ns(cfg_.pair_window_s)) {
   if (!cfg_.events.empty()) events_.emplace(ctx, cfg_.events);
   for (std::size_t i = 0; i < control::kFingertips; ++i) {
     frames_[i].elements.resize(cfg_.fingertips[i].calibration.elements.size());
@@ -116,6 +117,12 @@ void HandNode::on_topic_message() {
     ++counters_.incomplete[ki];
     return;
   }
+  // A frame of this fingertip still waits for its pair: the controller runs on it before this
+  // one replaces it (no frame's displacement is skipped).
+  if (pairing_.waiting(k)) {
+    ++counters_.unpaired;
+    step(util::monotonic_ns(), pairing_.take());
+  }
   if (wire::read_tactile_frame(f, cfg_.fingertips[ki].calibration, frame) !=
       wire::DecodeStatus::kOk) {
     frame.header = previous;
@@ -127,7 +134,14 @@ void HandNode::on_topic_message() {
   received_ns_[ki] = received_ns;
   const std::int64_t now = util::monotonic_ns();
   last_whole_ns_[ki] = now;
-  step(now, k);
+  const bool other_live = live(1 - ki, now);
+  if (pairing_.arrived(k, frame.header.camera_timestamp_ns, now, other_live))
+    step(now, pairing_.take());
+}
+
+bool HandNode::live(std::size_t fingertip, std::int64_t now_ns) const {
+  return have_frame_[fingertip] &&
+         now_ns - last_whole_ns_[fingertip] <= seconds_to_ns(cfg_.controller.stale_after_s);
 }
 
 void HandNode::on_arm_message() {
@@ -185,7 +199,7 @@ bool HandNode::ready(std::int64_t now_ns) {
   return false;
 }
 
-void HandNode::step(std::int64_t now_ns, int fresh_fingertip) {
+void HandNode::step(std::int64_t now_ns, FramePairing::Fresh fresh) {
   if (!ready(now_ns)) return;
   last_update_ns_ = now_ns;
   control::ControllerInput in;
@@ -197,7 +211,7 @@ void HandNode::step(std::int64_t now_ns, int fresh_fingertip) {
     t.normals = cfg_.fingertips[i].normals;
     t.sequence = frames_[i].header.sequence;
     t.camera_timestamp_ns = frames_[i].header.camera_timestamp_ns;
-    t.fresh = static_cast<int>(i) == fresh_fingertip;
+    t.fresh = fresh[i];
     t.stale = !have_frame_[i] || now_ns - last_whole_ns_[i] > stale_ns;
     any_stale = any_stale || t.stale;
   }
@@ -235,7 +249,9 @@ Outcome HandNode::run() {
   Outcome outcome = Outcome::kStopped;
   while (!util::stop_requested()) {
     std::int64_t now = util::monotonic_ns();
-    const std::int64_t until_tick = std::max<std::int64_t>(0, last_update_ns_ + period_ns - now);
+    std::int64_t until_tick = std::max<std::int64_t>(0, last_update_ns_ + period_ns - now);
+    if (pairing_.any_waiting())
+      until_tick = std::max<std::int64_t>(0, pairing_.deadline_ns() - now);
     const auto wait =
         std::chrono::milliseconds(std::min<std::int64_t>(until_tick / 1000000 + 1, 50));
     wire::poll_readable(sockets, wait);
@@ -244,8 +260,13 @@ Outcome HandNode::run() {
     while (arm_.receive(arm_buf_, std::chrono::milliseconds(0)))
       on_arm_message();
     now = util::monotonic_ns();
+    // A frame waited its whole window without its pair: the controller runs on it alone.
+    if (pairing_.due(now)) {
+      ++counters_.unpaired;
+      step(now, pairing_.take());
+    }
     // Time-driven steps (timeouts, settling, staleness) run even when no frame arrives.
-    if (now - last_update_ns_ >= period_ns) step(now, -1);
+    if (!pairing_.any_waiting() && now - last_update_ns_ >= period_ns) step(now, {});
     if (now - last_sent_ns_ >= heartbeat_ns) send_heartbeat(now);
     if (have_arm_ && !arm_silent_reported_ && now - last_arm_ns_ > arm_timeout_ns) {
       util::log_warn("no word from the arm controller for {:.1f} s",
@@ -263,11 +284,10 @@ Outcome HandNode::run() {
   }
   util::log_info(
       "frames used {}/{}, skipped incomplete {}/{}, undecodable {}, commands {} (blocked {}), "
-      "events {}, "
-      "stale holds {}",
+      "events {}, stale holds {}, frames run without their pair {}",
       counters_.frames[0], counters_.frames[1], counters_.incomplete[0], counters_.incomplete[1],
       counters_.undecodable, counters_.commands, counters_.commands_blocked, counters_.events,
-      counters_.stale_holds);
+      counters_.stale_holds, counters_.unpaired);
   return outcome;
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 #include <zmq.hpp>
 
+#include "frame_pairing.hpp"
 #include "hand_config.hpp"
 #include "tactile/control/controller.hpp"
 #include "tactile/wire/arm.hpp"
@@ -26,6 +27,7 @@ struct HandCounters {
   std::uint64_t arm_states = 0;
   std::uint64_t events = 0;
   std::uint64_t stale_holds = 0;
+  std::uint64_t unpaired = 0;  // frames whose other fingertip's frame did not come within pair_window_s
 };
 
 enum class Outcome { kDone, kAborted, kStopped };
@@ -41,7 +43,8 @@ class HandNode {
  private:
   void on_topic_message();
   void on_arm_message();
-  void step(std::int64_t now_ns, int fresh_fingertip);
+  void step(std::int64_t now_ns, FramePairing::Fresh fresh);
+  bool live(std::size_t fingertip, std::int64_t now_ns) const;
   void send_command(const control::Command& c, std::int64_t now_ns);
   void send_heartbeat(std::int64_t now_ns);
   void send_envelope();
@@ -54,6 +57,7 @@ class HandNode {
   wire::Dealer arm_;
   std::optional<wire::Publisher> events_;
   control::GraspMoveTwistController controller_;
+  FramePairing pairing_;
 
   // Reused buffers: the per-frame path allocates nothing once they have grown.
   wire::TopicMessage msg_;

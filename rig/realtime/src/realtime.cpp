@@ -458,8 +458,11 @@ void write_node_configs(const Scenario& sc, const std::filesystem::path& dir,
       "arm: tcp://127.0.0.1:5556\n"
       "events: tcp://*:5558\n"
       "# The arm controller's deadman is {:.0f} ms: stay well inside it when idle.\n"
-      "heartbeat_period_s: {}\n",
-      sc.source, opt.deadman_s * 1e3, opt.deadman_s / 4);
+      "heartbeat_period_s: {}\n"
+      "# The rig's two cameras expose together: run the controller on both frames of an\n"
+      "# exposure at once, waiting at most 0.4 periods for the second.\n"
+      "pair_window_s: {}\n",
+      sc.source, opt.deadman_s * 1e3, opt.deadman_s / 4, 0.4 / sc.camera.fps);
   hand += hand_controller_yaml(sc);
   util::write_file_atomic(dir / "hand_node.yaml", hand);
 }

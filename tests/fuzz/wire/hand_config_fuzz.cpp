@@ -26,6 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     fuzz::require(!cfg.subscribe.empty(), "no sensor_node endpoint");
     for (double v : {cfg.heartbeat_period_s, cfg.control_period_s, cfg.arm_timeout_s})
       fuzz::require(v > 0 && std::isfinite(v), "a period is not positive and finite");
+    fuzz::require(cfg.pair_window_s >= 0 && cfg.pair_window_s <= 1, "pair_window_s out of 0..1");
   });
   return 0;
 }

@@ -233,6 +233,7 @@ const char* kHandConfigs[] = {
     "events: tcp://*:5558\n"
     "heartbeat_period_s: 0.1\n"
     "control_period_s: 0.005\n"
+    "pair_window_s: 0.002\n"
     "arm_timeout_s: 1.0\n"
     "controller:\n"
     "  stale_after_s: 0.03\n"
@@ -327,6 +328,7 @@ int main(int argc, char** argv) {
                           "events",
                           "heartbeat_period_s",
                           "control_period_s",
+                          "pair_window_s",
                           "arm_timeout_s",
                           "controller",
                           "left.yaml",

@@ -171,6 +171,8 @@ struct RunResult {
   std::vector<control::CommandKind> commands;
   std::uint64_t commands_naming_both_sensors = 0;
   std::uint64_t commands_naming_unknown_frames = 0;
+  // Commands whose two answers are frames of different exposures (camera timestamps).
+  std::uint64_t commands_answering_two_exposures = 0;
   std::uint64_t heartbeats = 0;
   testing::ProcessResult process;
 };
@@ -288,7 +290,9 @@ class HandNodeRun {
         world.apply(cmd.command);
         r.commands.push_back(cmd.command.kind);
         std::set<int> tips;
+        std::set<std::int64_t> exposures;
         for (std::size_t i = 0; i < cmd.answers.count; ++i) {
+          exposures.insert(cmd.answers.refs[i].camera_timestamp_ns);
           const auto& a = cmd.answers.refs[i];
           if (a.fingertip < 0 ||
               !published.count({kIds[static_cast<std::size_t>(a.fingertip)], a.sequence})) {
@@ -297,6 +301,7 @@ class HandNodeRun {
           tips.insert(a.fingertip);
         }
         if (tips.size() == 2) ++r.commands_naming_both_sensors;
+        if (exposures.size() > 1) ++r.commands_answering_two_exposures;
       }
       while (events.receive(ev, 0ms)) {
         if (wire::decode(ev.payload, env) == wire::DecodeStatus::kOk && env.has_event()) {
@@ -403,6 +408,9 @@ TEST(HandNode, RunsThePapersTaskAndEndsDone) {
   ASSERT_GT(r.commands.size(), 10U);
   EXPECT_EQ(r.commands_naming_unknown_frames, 0U);
   EXPECT_EQ(r.commands_naming_both_sensors, r.commands.size() - 0);
+  // Both frames of an exposure are published together: the controller runs once on the pair
+  // (pair_window_s), so no command answers one fingertip's new frame with the other's old one.
+  EXPECT_EQ(r.commands_answering_two_exposures, 0U);
   EXPECT_EQ(r.commands.back(), control::CommandKind::kStop);
   EXPECT_GT(r.heartbeats, 0U);
 }

@@ -1,0 +1,64 @@
+// hand_node's configuration: pair_window_s is read, defaults on, and a bad value is refused by
+// a line naming the file, the key and the value.
+#include "hand_config.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "process.hpp"
+#include "tactile/config/yaml.hpp"
+
+namespace tactile::hand {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kLab = fs::path(TACTILE_SOURCE_DIR) / "docker" / "config" / "lab";
+
+class HandConfigFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    for (const char* f : {"left.yaml", "right.yaml"})
+      fs::copy_file(kLab / f, dir_ / f);
+  }
+  fs::path write(const std::string& extra) {
+    const fs::path p = dir_ / "hand_node.yaml";
+    std::ofstream(p) << "format: tactile-hand/1\n"
+                        "fingertips:\n"
+                        "  - {sensor_id: left, calibration: left.yaml}\n"
+                        "  - {sensor_id: right, calibration: right.yaml}\n"
+                     << extra;
+    return p;
+  }
+  testing::TempDir dir_;
+};
+
+TEST_F(HandConfigFile, PairWindowDefaultsOnAndIsRead) {
+  std::vector<std::string> warnings;
+  EXPECT_DOUBLE_EQ(load_hand_config(write(""), &warnings).pair_window_s, 0.002);
+  EXPECT_DOUBLE_EQ(load_hand_config(write("pair_window_s: 0\n"), &warnings).pair_window_s, 0.0);
+  EXPECT_DOUBLE_EQ(load_hand_config(write("pair_window_s: 0.0008\n"), &warnings).pair_window_s,
+                   0.0008);
+  EXPECT_TRUE(warnings.empty()) << warnings.front();
+}
+
+TEST_F(HandConfigFile, BadPairWindowNamesFileKeyAndValue) {
+  for (const char* bad : {"-0.5", "2", "soon"}) {
+    const fs::path p = write(std::string("pair_window_s: ") + bad + "\n");
+    try {
+      load_hand_config(p, nullptr);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const config::ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(p.string()), std::string::npos) << what;
+      EXPECT_NE(what.find("pair_window_s"), std::string::npos) << what;
+      EXPECT_NE(what.find(bad), std::string::npos) << what;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace tactile::hand
