@@ -211,12 +211,14 @@ void Pipeline::run(const std::atomic<bool>& stop) noexcept {
         std::chrono::duration<double>(cfg_.frame_timeout_s));
     last_stats_ns_ = util::monotonic_ns();
     while (!stop) {
-      const camera::Frame frame = cam_->wait_frame(timeout);
+      // Before the wait, never between a frame and its TactileFrame: the counters sent then
+      // count exactly the frames whose TactileFrames went out.
       const std::int64_t now = util::monotonic_ns();
       if (now - last_stats_ns_ >= static_cast<std::int64_t>(stats_period_s_ * 1e9)) {
         publish_stats();
         last_stats_ns_ = now;
       }
+      const camera::Frame frame = cam_->wait_frame(timeout);
       if (!frame.received) {
         if (stop) break;
         util::log_warn("{}: no frame for {:.2f} s ({}): reopening the camera", cfg_.sensor_id,
