@@ -8,6 +8,7 @@
 
 #include <fstream>
 #include <map>
+#include <optional>
 
 #include "fault_support.hpp"
 #include "process.hpp"
@@ -113,16 +114,28 @@ TEST(HandNodeUnderLoss, SkipsAndCountsEveryIncompleteFrame) {
   zmq::context_t ctx;
   Collector collector(ctx, {endpoints[0], endpoints[1]});
   StillArm arm(ctx);
-  ChildProcess hand({TACTILE_HAND_NODE_PATH, "--config", (dir / "hand.yaml").string(),
-                     "--subscribe", endpoints[0], "--subscribe", endpoints[1], "--arm",
-                     arm.endpoint()});
   ChildProcess left_node({TACTILE_SENSOR_NODE_PATH, "--config", left_config.string()});
   ChildProcess right_node({TACTILE_SENSOR_NODE_PATH, "--config", right_config.string()});
   ChildProcess* nodes[2] = {&left_node, &right_node};
+  // hand_node starts once this test receives frames of both sensors: every frame hand_node
+  // answers is then one the test saw (its first command may be its only one, the arm is still).
+  std::optional<ChildProcess> hand_process;
   const auto logs = [&] {
     return "\nsensor_node left:\n" + left_node.output() + "\nsensor_node right:\n" +
-           right_node.output() + "\nhand_node:\n" + hand.output();
+           right_node.output() + "\nhand_node:\n" +
+           (hand_process ? hand_process->output() : std::string("(not started)"));
   };
+  for (const auto deadline = std::chrono::steady_clock::now() + 20s;
+       collector.complete("left") == 0 || collector.complete("right") == 0;) {
+    collector.poll(5ms);
+    ASSERT_TRUE(left_node.running() && right_node.running() &&
+                std::chrono::steady_clock::now() < deadline)
+        << "no frames from the sensor_nodes" << logs();
+  }
+  hand_process.emplace(std::vector<std::string>{
+      TACTILE_HAND_NODE_PATH, "--config", (dir / "hand.yaml").string(), "--subscribe",
+      endpoints[0], "--subscribe", endpoints[1], "--arm", arm.endpoint()});
+  ChildProcess& hand = *hand_process;
   // Runs the arm controller and the collector until `done` or the deadline.
   const auto run_until = [&](const std::function<bool()>& done, std::chrono::seconds limit) {
     const std::int64_t deadline = util::monotonic_ns() + std::chrono::nanoseconds(limit).count();
@@ -140,11 +153,33 @@ TEST(HandNodeUnderLoss, SkipsAndCountsEveryIncompleteFrame) {
     return true;
   };
 
-  // 1. No loss, until hand_node runs the task on frames of both fingertips.
+  // The frames the collector saw, by (fingertip, sequence).
+  const auto statuses = [&] {
+    std::map<std::pair<int, std::uint64_t>, v1::FrameStatus> status;
+    for (std::size_t t = 0; t < 2; ++t) {
+      for (const auto& f : collector.frames(kIds[t]))
+        status[{static_cast<int>(t), f.sequence()}] = f.status();
+    }
+    return status;
+  };
+  // Commands' answers naming frames the collector saw (the first commands may answer frames
+  // sent before its subscription took effect).
+  const auto named_seen = [&] {
+    const auto status = statuses();
+    std::size_t named = 0;
+    for (const auto& c : arm.commands()) {
+      for (std::size_t i = 0; i < c.answers.count; ++i)
+        named += status.count({c.answers.refs[i].fingertip, c.answers.refs[i].sequence});
+    }
+    return named;
+  };
+
+  // 1. No loss, until hand_node runs the task on frames of both fingertips, and a command names
+  //    frames this test saw.
   ASSERT_TRUE(run_until(
       [&] {
         return arm.named_both_fingertips() && collector.complete("left") >= 20 &&
-               collector.complete("right") >= 20;
+               collector.complete("right") >= 20 && named_seen() > 0;
       },
       20s))
       << "hand_node never started the task" << logs();
@@ -204,11 +239,7 @@ TEST(HandNodeUnderLoss, SkipsAndCountsEveryIncompleteFrame) {
   EXPECT_EQ(hand_line->undecodable, 0U) << logs();
 
   // Every command names whole frames only.
-  std::map<std::pair<int, std::uint64_t>, v1::FrameStatus> status;
-  for (std::size_t t = 0; t < 2; ++t) {
-    for (const auto& f : collector.frames(kIds[t]))
-      status[{static_cast<int>(t), f.sequence()}] = f.status();
-  }
+  const auto status = statuses();
   std::size_t named = 0;
   for (const auto& c : arm.commands()) {
     for (std::size_t i = 0; i < c.answers.count; ++i) {
