@@ -430,7 +430,7 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
   const fs::path report = dir / "report.json";
   Child rig_p("rig",
               {rig.string(), "--scenario", scenario.string(), "--report", report.string(),
-               "--wait-for-hand", fmt::format("{}", s.start_timeout_s)},
+               "--wait-for-hand", fmt::format("{}", s.start_timeout_s), "--log-level", "debug"},
               dir / "logs" / "rig.log");
   Child sensor_p("sensor_node",
                  {sensor.string(), "--config", (dir / "config" / "sensor_node.yaml").string()},

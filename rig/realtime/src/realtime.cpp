@@ -233,7 +233,15 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
     last_command = cmd.sequence;
     for (std::size_t i = 0; i < cmd.answers.count; ++i) {
       const std::int64_t cam_ts = cmd.answers.refs[i].camera_timestamp_ns;
-      if (cam_ts > 0) latencies_ms.push_back(static_cast<double>(now_ns - cam_ts) * 1e-6);
+      if (cam_ts <= 0) continue;
+      const double ms = static_cast<double>(now_ns - cam_ts) * 1e-6;
+      latencies_ms.push_back(ms);
+      // Answers older than a period are the tail of latency_ms: say which they were.
+      if (now_ns - cam_ts > period_ns) {
+        util::log_debug("command {} answered frame {} of fingertip {} {:.2f} ms after its exposure",
+                        cmd.sequence, cmd.answers.refs[i].sequence, cmd.answers.refs[i].fingertip,
+                        ms);
+      }
     }
     advance_to(now_ns);  // the command acts from the moment it arrived
     if (!world.apply(to_world_command(cmd.command))) ++c.invalid_commands;
