@@ -6,9 +6,11 @@
 // a lab triggers its cameras together), but their frames reach hand_node one after the other.
 // Running the controller on the first would answer it with the other fingertip's frame of the
 // exposure before, a whole period old. So a frame waits, at most `window`, for the other
-// fingertip's frame whose camera timestamp lies within `window` of its own; the controller then
-// runs once with both marked fresh, as in the lockstep rig. A window of 0 runs it on every frame
-// as it comes.
+// fingertip's frame stamped within `window` of its own; the controller then runs once with both
+// marked fresh, as in the lockstep rig. A window of 0 runs it on every frame as it comes.
+//
+// The stamp is sensor_node's receive time of the frame, not the camera's timestamp: cameras
+// triggered together need not share a clock, the host that receives them has one.
 //
 // Pure: time is an argument, nothing allocates, nothing throws.
 #include <array>
@@ -26,18 +28,18 @@ class FramePairing {
   // its next frame replaces it.
   bool waiting(int k) const noexcept { return pending_[index(k)]; }
 
-  // A whole frame of fingertip k, taken at camera_ts_ns, arrived at now_ns (a monotonic clock).
+  // A whole frame of fingertip k, stamped stamp_ns, arrived at now_ns (a monotonic clock).
   // other_live: the other fingertip is neither stale nor without a frame yet (a dead sensor is
   // not waited for). Returns true when the controller should run now on take().
-  bool arrived(int k, std::int64_t camera_ts_ns, std::int64_t now_ns, bool other_live) noexcept {
+  bool arrived(int k, std::int64_t stamp_ns, std::int64_t now_ns, bool other_live) noexcept {
     const std::size_t i = index(k);
     const std::size_t j = 1 - i;
     pending_[i] = true;
-    last_ts_[i] = camera_ts_ns;
+    last_ts_[i] = stamp_ns;
     has_ts_[i] = true;
     if (window_ns_ <= 0 || !other_live || pending_[j]) return true;
     // The other fingertip's frame of this exposure came already, or it is ahead of this one.
-    if (has_ts_[j] && last_ts_[j] >= camera_ts_ns - window_ns_) return true;
+    if (has_ts_[j] && last_ts_[j] >= stamp_ns - window_ns_) return true;
     deadline_ns_ = now_ns + window_ns_;
     return false;
   }

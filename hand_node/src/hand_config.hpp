@@ -32,7 +32,7 @@ struct HandConfig {
   double control_period_s = 0.005;  // the controller also runs this often without new frames
   double arm_timeout_s = 1.0;       // no ArmState for this long: the arm controller is gone
   // A frame waits at most this long for the other fingertip's frame of the same exposure
-  // (camera timestamps this close); 0: the controller runs on every frame as it comes.
+  // (received by sensor_node this close together); 0: the controller runs on every frame.
   double pair_window_s = 0.002;
   control::Config controller;
   // CURVE on both links (docs/security.md); unset: plain TCP.

@@ -134,14 +134,18 @@ void HandNode::on_topic_message() {
   received_ns_[ki] = received_ns;
   const std::int64_t now = util::monotonic_ns();
   last_whole_ns_[ki] = now;
-  const bool other_live = live(1 - ki, now);
-  if (pairing_.arrived(k, frame.header.camera_timestamp_ns, now, other_live))
+  const std::size_t other = 1 - ki;
+  const std::int64_t stale_ns = seconds_to_ns(cfg_.controller.stale_after_s);
+  // The other fingertip is waited for when its frames came lately here, or when its last one
+  // left sensor_node shortly before this one: after hand_node was not scheduled for a while, its
+  // next frame is queued behind this one, and not waiting would hold the arm for stale data that
+  // is not stale.
+  const bool other_live =
+      have_frame_[other] &&
+      (now - last_whole_ns_[other] <= stale_ns ||
+       frames_[other].header.receive_timestamp_ns >= frame.header.receive_timestamp_ns - stale_ns);
+  if (pairing_.arrived(k, frame.header.receive_timestamp_ns, now, other_live))
     step(now, pairing_.take());
-}
-
-bool HandNode::live(std::size_t fingertip, std::int64_t now_ns) const {
-  return have_frame_[fingertip] &&
-         now_ns - last_whole_ns_[fingertip] <= seconds_to_ns(cfg_.controller.stale_after_s);
 }
 
 void HandNode::on_arm_message() {
@@ -254,7 +258,15 @@ Outcome HandNode::run() {
       until_tick = std::max<std::int64_t>(0, pairing_.deadline_ns() - now);
     const auto wait =
         std::chrono::milliseconds(std::min<std::int64_t>(until_tick / 1000000 + 1, 50));
+    const std::int64_t poll_start = util::monotonic_ns();
     wire::poll_readable(sockets, wait);
+    // Woken more than a control period later than asked: this process did not run (not
+    // scheduled, stopped). Frames sent meanwhile may still be on their way through ZeroMQ's I/O
+    // thread: the time-driven step (which judges staleness) waits for one more short poll.
+    const bool overslept =
+        util::monotonic_ns() - poll_start -
+            std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count() >
+        period_ns;
     while (sub_.receive(msg_, std::chrono::milliseconds(0)))
       on_topic_message();
     while (arm_.receive(arm_buf_, std::chrono::milliseconds(0)))
@@ -266,7 +278,8 @@ Outcome HandNode::run() {
       step(now, pairing_.take());
     }
     // Time-driven steps (timeouts, settling, staleness) run even when no frame arrives.
-    if (!pairing_.any_waiting() && now - last_update_ns_ >= period_ns) step(now, {});
+    if (!overslept && !pairing_.any_waiting() && now - last_update_ns_ >= period_ns)
+      step(now, {});
     if (now - last_sent_ns_ >= heartbeat_ns) send_heartbeat(now);
     if (have_arm_ && !arm_silent_reported_ && now - last_arm_ns_ > arm_timeout_ns) {
       util::log_warn("no word from the arm controller for {:.1f} s",

@@ -44,7 +44,6 @@ class HandNode {
   void on_topic_message();
   void on_arm_message();
   void step(std::int64_t now_ns, FramePairing::Fresh fresh);
-  bool live(std::size_t fingertip, std::int64_t now_ns) const;
   void send_command(const control::Command& c, std::int64_t now_ns);
   void send_heartbeat(std::int64_t now_ns);
   void send_envelope();

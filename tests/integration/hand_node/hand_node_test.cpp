@@ -182,6 +182,7 @@ struct RunResult {
 struct Injection {
   std::array<std::array<double, 2>, 2> slip{};
   std::array<bool, 2> publish{true, true};
+  int signal_hand = 0;  // a signal sent to hand_node before this frame is published
 };
 using Script = std::function<Injection(const SimWorld&, int frame)>;
 
@@ -316,6 +317,7 @@ class HandNodeRun {
       }
       world.step(dt);
       const Injection inj = script(world, frame++);
+      if (inj.signal_hand != 0) hand.signal(inj.signal_hand);
       for (std::size_t t = 0; t < 2; ++t) {
         if (!inj.publish[t]) continue;
         world.fill_readings(t, readings[t], inj.slip[t]);
@@ -323,6 +325,8 @@ class HandNodeRun {
         h.sequence = sequence[t]++;
         h.camera_frame_id = h.sequence + 1;
         h.camera_timestamp_ns = 1'000'000'000 + static_cast<std::int64_t>(frame) * 10'000'000;
+        // sensor_node's receive time: the second camera's frame a little after the first's.
+        h.receive_timestamp_ns = h.camera_timestamp_ns + 300'000 + static_cast<std::int64_t>(t) * 100'000;
         h.status = v1::FRAME_STATUS_COMPLETE;
         h.nominal_period_ns = 10'000'000;
         wire::fill_tactile_frame(kIds[t], h, readings[t], cals_[t].mm_per_px,
@@ -452,6 +456,31 @@ TEST(HandNode, HoldsOnStaleDataAndResumes) {
   // The task went on after resuming: lowering without a bottle to meet ends it aborted (exit 3).
   EXPECT_EQ(r.events.back(), v1::EVENT_KIND_ABORTED);
   EXPECT_EQ(r.process.exit_code, 3);
+}
+
+TEST(HandNode, FramesQueuedWhileItWasNotScheduledAreNotHeldAsStale) {
+  // hand_node stopped (SIGSTOP) for 6 frame periods in transport, twice the staleness limit,
+  // while both sensors go on publishing: when it runs again their frames are waiting in its
+  // socket. Data that waited is late, not stale: no hold, and the task goes on to DONE.
+  HandNodeRun run;
+  int stopped_at = -1;
+  const RunResult r = run.run(
+      [&](const SimWorld& w, int frame) {
+        Injection inj = paper_story(w, frame);
+        if (w.segment() == "MOVE4" && stopped_at < 0) {
+          stopped_at = frame;
+          inj.signal_hand = SIGSTOP;
+        }
+        if (stopped_at >= 0 && frame == stopped_at + 6) inj.signal_hand = SIGCONT;
+        return inj;
+      },
+      40s);
+  ASSERT_FALSE(r.process.timed_out) << r.process.err;
+  ASSERT_GE(stopped_at, 0) << "the transport never started";
+  EXPECT_EQ(std::count(r.events.begin(), r.events.end(), v1::EVENT_KIND_STALE_HOLD), 0)
+      << r.process.err;
+  EXPECT_EQ(r.events.back(), v1::EVENT_KIND_DONE) << r.process.err;
+  EXPECT_EQ(r.process.exit_code, 0) << r.process.err;
 }
 
 std::uint64_t logged_count(const std::string& log, const std::string& what) {
