@@ -59,8 +59,14 @@ TEST(SensorNodeRecording, RecordsReplaysAndPlotsARealSensorNode) {
     const auto* p = reinterpret_cast<const std::uint8_t*>(r.payload().data());
     ASSERT_EQ(wire::decode({p, r.payload().size()}, env), wire::DecodeStatus::kOk);
     const v1::TactileFrame& f = env.tactile_frame();
-    EXPECT_EQ(f.status(), v1::FRAME_STATUS_COMPLETE);
-    EXPECT_EQ(f.elements_size(), 40);
+    // The camera's very first frame may be incomplete (Aravis applies the socket buffer when it
+    // starts, docs/camera.md); it is published as such, never measured. Every other is whole.
+    if (f.sequence() == 0 && f.status() == v1::FRAME_STATUS_MISSING_PACKETS) {
+      EXPECT_EQ(f.elements_size(), 0);
+    } else {
+      EXPECT_EQ(f.status(), v1::FRAME_STATUS_COMPLETE) << "frame " << f.sequence();
+      EXPECT_EQ(f.elements_size(), 40) << "frame " << f.sequence();
+    }
     if (i > 0) {
       EXPECT_EQ(f.sequence(), previous + 1);  // nothing lost between node and log
     }
