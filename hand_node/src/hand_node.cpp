@@ -28,7 +28,8 @@ HandNode::HandNode(HandConfig cfg, zmq::context_t& ctx)
            cfg_.sensor_security ? &*cfg_.sensor_security : nullptr),
       arm_(ctx, cfg_.arm, cfg_.arm_security ? &*cfg_.arm_security : nullptr),
       controller_(cfg_.controller),
-      pairing_(seconds_to_ns(cfg_.pair_window_s)) {
+      pairing_(seconds_to_ns(cfg_.pair_window_s)),
+      stale_ns_(seconds_to_ns(cfg_.controller.stale_after_s)) {
   if (!cfg_.events.empty()) events_.emplace(ctx, cfg_.events);
   for (std::size_t i = 0; i < control::kFingertips; ++i) {
     frames_[i].elements.resize(cfg_.fingertips[i].calibration.elements.size());
@@ -135,15 +136,14 @@ void HandNode::on_topic_message() {
   const std::int64_t now = util::monotonic_ns();
   last_whole_ns_[ki] = now;
   const std::size_t other = 1 - ki;
-  const std::int64_t stale_ns = seconds_to_ns(cfg_.controller.stale_after_s);
   // The other fingertip is waited for when its frames came lately here, or when its last one
   // left sensor_node shortly before this one: after hand_node was not scheduled for a while, its
   // next frame is queued behind this one, and not waiting would hold the arm for stale data that
   // is not stale.
   const bool other_live =
       have_frame_[other] &&
-      (now - last_whole_ns_[other] <= stale_ns ||
-       frames_[other].header.receive_timestamp_ns >= frame.header.receive_timestamp_ns - stale_ns);
+      (now - last_whole_ns_[other] <= stale_ns_ ||
+       frames_[other].header.receive_timestamp_ns >= frame.header.receive_timestamp_ns - stale_ns_);
   if (pairing_.arrived(k, frame.header.receive_timestamp_ns, now, other_live))
     step(now, pairing_.take());
 }
@@ -207,7 +207,6 @@ void HandNode::step(std::int64_t now_ns, FramePairing::Fresh fresh) {
   if (!ready(now_ns)) return;
   last_update_ns_ = now_ns;
   control::ControllerInput in;
-  const std::int64_t stale_ns = seconds_to_ns(cfg_.controller.stale_after_s);
   bool any_stale = false;
   for (std::size_t i = 0; i < control::kFingertips; ++i) {
     control::FingertipInput& t = in.fingertips[i];
@@ -216,7 +215,7 @@ void HandNode::step(std::int64_t now_ns, FramePairing::Fresh fresh) {
     t.sequence = frames_[i].header.sequence;
     t.camera_timestamp_ns = frames_[i].header.camera_timestamp_ns;
     t.fresh = fresh[i];
-    t.stale = !have_frame_[i] || now_ns - last_whole_ns_[i] > stale_ns;
+    t.stale = !have_frame_[i] || now_ns - last_whole_ns_[i] > stale_ns_;
     any_stale = any_stale || t.stale;
   }
   if (any_stale && !stale_) ++counters_.stale_holds;

@@ -57,6 +57,7 @@ class HandNode {
   std::optional<wire::Publisher> events_;
   control::GraspMoveTwistController controller_;
   FramePairing pairing_;
+  const std::int64_t stale_ns_;  // controller.stale_after_s
 
   // Reused buffers: the per-frame path allocates nothing once they have grown.
   wire::TopicMessage msg_;
