@@ -247,6 +247,21 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
     if (!world.apply(to_world_command(cmd.command))) ++c.invalid_commands;
   };
 
+  // Holds the arm once hand_node has been silent longer than the deadman. Checked whenever the
+  // sockets are served (at most 5 ms apart), not only once per frame: at 30 fps a check per
+  // frame would hold the arm up to a period late.
+  const auto check_deadman = [&](std::int64_t now_ns) {
+    if (!have_peer || deadman_tripped ||
+        now_ns - last_heard_ns <= static_cast<std::int64_t>(opt.deadman_s * 1e9))
+      return;
+    deadman_tripped = true;
+    ++c.deadman_trips;
+    advance_to(now_ns);  // the hold acts from the moment it was decided
+    world.apply(to_world_command(control::Command::hold()));
+    util::log_warn("deadman: nothing from hand_node for {:.0f} ms: arm held",
+                   static_cast<double>(now_ns - last_heard_ns) * 1e-6);
+  };
+
   const auto on_frame = [&]() {
     if (decoder.decode(msg.payload) != wire::DecodeStatus::kOk) return;
     const v1::Envelope& env = decoder.envelope();
@@ -316,6 +331,7 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
         on_frame();
       while (events && events->receive(msg, milliseconds(0)))
         on_event();
+      check_deadman(util::realtime_ns());
       if (now >= render_ns || util::stop_requested()) break;
     }
     const std::int64_t now = util::realtime_ns();
@@ -366,14 +382,7 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
       if (deadman_tripped) state_env.mutable_arm_state()->add_faults(v1::ARM_FAULT_DEADMAN);
       wire::encode(state_env, out);
       arm.send(peer, bytes_of(out));
-      if (!deadman_tripped &&
-          after - last_heard_ns > static_cast<std::int64_t>(opt.deadman_s * 1e9)) {
-        deadman_tripped = true;
-        ++c.deadman_trips;
-        world.apply(to_world_command(control::Command::hold()));
-        util::log_warn("deadman: nothing from hand_node for {:.0f} ms: arm held",
-                       static_cast<double>(after - last_heard_ns) * 1e-6);
-      }
+      check_deadman(after);
     } else if (after - start_ns > static_cast<std::int64_t>(opt.wait_for_hand_s * 1e9)) {
       rep.end_reason = "no hand_node";
       break;
