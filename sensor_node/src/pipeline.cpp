@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "tactile/util/clock.hpp"
+#include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/pgm.hpp"
 #include "tactile/wire/envelope.hpp"
@@ -144,6 +145,21 @@ void Pipeline::reference_in_use() {
   publish_reference();
 }
 
+void Pipeline::save_reference() {
+  if (cfg_.reference_cache.empty()) return;
+  if (saver_.joinable()) saver_.join();  // a previous capture's write (a reopen)
+  saver_ = std::thread([path = cfg_.reference_cache, id = cfg_.sensor_id,
+                        pgm = util::encode_pgm(extractor_.reference_image().view())] {
+    try {
+      util::write_file_atomic(path, pgm);
+      util::log_info("{}: reference saved to {}", id, path.string());
+    } catch (const std::exception& e) {
+      util::log_warn("{}: reference not saved ({}); a restart will capture one again", id,
+                     e.what());
+    }
+  });
+}
+
 void Pipeline::publish_reference() {
   if (!raw_frames_ || !extractor_.has_reference()) return;
   raw_.Clear();
@@ -244,11 +260,7 @@ void Pipeline::run(const std::atomic<bool>& stop) noexcept {
           util::log_info("{}: reference captured from {} frames", cfg_.sensor_id, r.frames);
           reference_in_use();
           forgot_pending_ = true;
-          if (!cfg_.reference_cache.empty()) {
-            util::write_pgm(cfg_.reference_cache, extractor_.reference_image().view());
-            util::log_info("{}: reference saved to {}", cfg_.sensor_id,
-                           cfg_.reference_cache.string());
-          }
+          save_reference();
         } else if (r.status != ReferenceStatus::kCollecting) {
           util::log_warn("{}: reference {} (element {}, excess G {:.0f}); starting again",
                          cfg_.sensor_id, to_string(r.status), r.element_id, r.value);
@@ -277,6 +289,11 @@ void Pipeline::run(const std::atomic<bool>& stop) noexcept {
     util::log_error("{}", fatal_);
   }
   cam_->stop();
+  if (saver_.joinable()) saver_.join();
+}
+
+Pipeline::~Pipeline() {
+  if (saver_.joinable()) saver_.join();
 }
 
 }  // namespace tactile::sensor

@@ -7,6 +7,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 
 #include "sensor_config.hpp"
 #include "tactile/camera/camera.hpp"
@@ -63,6 +64,9 @@ class Pipeline {
  public:
   Pipeline(CameraConfig cfg, const ExtractorOptions& measurement, double stats_period_s,
            bool raw_frames, std::unique_ptr<camera::Camera> cam, SharedPublisher& pub);
+  ~Pipeline();
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
   // Runs until `stop` is set: opens the camera (retrying with backoff), takes or loads the
   // reference, then measures and publishes every frame. Never throws.
   void run(const std::atomic<bool>& stop) noexcept;
@@ -79,6 +83,10 @@ class Pipeline {
   // recording and a replay all measure with the same one); then it is announced.
   void reference_in_use();
   void publish_reference();
+  // Writes the reference to reference_cache on a thread of its own: the write ends with an
+  // fsync that can take tens of milliseconds, and frames arriving meanwhile are measured when
+  // they arrive, not after it. A failed write is a warning (a restart then captures again).
+  void save_reference();
   void publish_raw(const camera::Frame& frame, std::uint64_t tactile_sequence, bool forgot);
   void wait(double seconds, const std::atomic<bool>& stop) const;
 
@@ -107,6 +115,7 @@ class Pipeline {
   std::int64_t last_stats_ns_ = 0;
   PipelineCounters counters_;
   std::string fatal_;
+  std::thread saver_;  // the reference being written, if any
 };
 
 }  // namespace tactile::sensor
