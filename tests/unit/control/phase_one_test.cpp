@@ -314,6 +314,45 @@ TEST(PhaseOne, SlipsRightAfterAStaleHoldOnLiftAreNotClassified) {
   EXPECT_EQ(ctl.phase(), Phase::kDone);
 }
 
+// The same for a hold the controller did not ask for: the arm controller's deadman (hand_node
+// silent for a moment) stops the lift, and hand_node sends the segment again. The stop and the
+// start make the cap slip against gravity; that is no support from below. Seen in a real-time run
+// under the sanitizers: the lift was called a release and the cap dropped.
+TEST(PhaseOne, SlipsWhileTheDeadmanHoldsTheLiftAndRightAfterAreNotClassified) {
+  const Config cfg = phase_one_config();
+  ASSERT_DOUBLE_EQ(cfg.resume_settle_s, 0.3);  // 30 frames of the scripted rig
+  GraspMoveTwistController ctl(cfg);
+  int lift_frames = 0;
+  ScriptedRig rig({}, [&lift_frames](ScriptedRig& r) {
+    if (r.segment() == "MOVE3") ++lift_frames;
+    if (lift_frames == 10) r.deadman_hold();
+    if (lift_frames == 12) r.slip(0, 0, 0.0, -0.012);  // the stop, against gravity
+    if (lift_frames == 14) r.deadman_resume();
+    if (lift_frames == 30) r.slip(1, 0, 0.0, -0.012);  // the start, 16 frames after
+    if (lift_frames == 60) r.slip(0, 0, 0.0, 0.012);   // the weight, once settled
+    bottle_on_lowering(r);
+  });
+  const testing::Trace t = testing::run(ctl, rig);
+  const std::vector<std::string> expected{"PHASE APPROACH",
+                                          "PHASE DESCEND",
+                                          "PHASE GRASP",
+                                          "TOUCH",
+                                          "GRASPING_ENDED",
+                                          "PHASE LIFT",
+                                          "RECOMPRESS tip0",
+                                          "RECOMPRESS tip1",
+                                          "GRASP_CLASSIFIED tip0",
+                                          "RECOMPRESS tip0",
+                                          "PHASE TRANSPORT",
+                                          "PHASE LOWER",
+                                          "RELEASE_CLASSIFIED tip0",
+                                          "PHASE RELEASE",
+                                          "PHASE RETRACT",
+                                          "DONE"};
+  EXPECT_EQ(describe(t.events), expected);
+  EXPECT_EQ(ctl.phase(), Phase::kDone);
+}
+
 TEST(PhaseOne, AfterTheResumeSettlesANegativeSlipOnLiftStillReleases) {
   GraspMoveTwistController ctl(phase_one_config());
   int lift_frames = 0;

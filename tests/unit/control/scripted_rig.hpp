@@ -78,6 +78,10 @@ class ScriptedRig {
     injected_[tip][element] = {dx_mm, dy_mm, 1.0};
   }
   void set_stale(std::size_t tip, bool stale) { stale_[tip] = stale; }
+  // The arm controller's deadman holds the wrist (no command of the controller's), until
+  // `deadman_resume`, which stands for hand_node sending the current segment again.
+  void deadman_hold() { wrist_held_ = true; }
+  void deadman_resume() { wrist_held_ = false; }
   void set_fresh(std::size_t tip, bool fresh) { fresh_[tip] = fresh; }
   const Vec3& finger_velocity(std::size_t tip) const { return finger_velocity_[tip]; }
 
