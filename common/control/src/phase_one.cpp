@@ -128,12 +128,13 @@ void PhaseOneSequencer::start(const StepInput& in, SegmentIds& ids, StepOutput& 
 
 void PhaseOneSequencer::step(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept {
   const double t = in.t;
-  // A hold the arm reports while it should move (the arm controller's deadman: nothing heard from
-  // us for a while) stops the lift or the lowering, and the restart hand_node then sends starts
-  // it again under the cap: the slips of the stop and the start are its inertia, not its weight
-  // or a support. As after a stale hold, no slip direction is classified while the arm holds
-  // nor for resume_settle_s after.
-  if (in.arm.holding && (phase_ == Phase::kLift || phase_ == Phase::kLower))
+  // A deadman hold of the arm controller (nothing heard from us for a while) stops the lift or
+  // the lowering, and the restart hand_node then sends starts it again under the cap: the slips
+  // of the stop and the start are its inertia, not its weight or a support. As after a stale
+  // hold, no slip direction is classified while the deadman holds nor for resume_settle_s
+  // after. Only the deadman: the feedback's `holding` also reports our own Holds, and for a
+  // frame after the next motion was sent.
+  if (in.arm.deadman && (phase_ == Phase::kLift || phase_ == Phase::kLower))
     settled_after_s_ = std::max(settled_after_s_, t + cfg_.resume_settle_s);
   switch (phase_) {
     case Phase::kApproach:

@@ -229,6 +229,7 @@ control::ArmFeedback to_feedback(const ArmStateData& s) {
   f.active_segment_id = s.active_segment_id;
   f.segment_done = s.segment_done;
   f.holding = s.holding;
+  f.deadman = s.deadman;
   f.fingertip_position_m = s.fingertip_position_m;
   return f;
 }

@@ -353,6 +353,24 @@ TEST(PhaseOne, SlipsWhileTheDeadmanHoldsTheLiftAndRightAfterAreNotClassified) {
   EXPECT_EQ(ctl.phase(), Phase::kDone);
 }
 
+// Only the deadman: the arm also reports `holding` after a Hold of our own, still for a frame
+// after the next motion was sent. A release felt on the lowering's first frames, with the arm's
+// feedback saying holding there, is classified (a real-time run under the sanitizers: a stale
+// hold in transport, the holding flag seen on the lowering's first frame, the release missed
+// and the task aborted at the lower limit).
+TEST(PhaseOne, OurOwnHoldReportedAtTheLoweringsStartDoesNotDelayTheRelease) {
+  GraspMoveTwistController ctl(phase_one_config());
+  ScriptedRig rig({}, [](ScriptedRig& r) {
+    weight_on_lift(r);
+    if (r.segment() == "MOVE5" && r.segment_frames() <= 1) r.report_holding_once();
+    if (r.segment() == "MOVE5" && r.segment_frames() == 3) r.slip(0, 0, 0.002, -0.015);
+  });
+  const testing::Trace t = testing::run(ctl, rig);
+  EXPECT_NE(testing::find(t.events, EventKind::kReleaseClassified), nullptr)
+      << ::testing::PrintToString(describe(t.events));
+  EXPECT_EQ(ctl.phase(), Phase::kDone);
+}
+
 TEST(PhaseOne, AfterTheResumeSettlesANegativeSlipOnLiftStillReleases) {
   GraspMoveTwistController ctl(phase_one_config());
   int lift_frames = 0;

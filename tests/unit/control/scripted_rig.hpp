@@ -80,8 +80,10 @@ class ScriptedRig {
   void set_stale(std::size_t tip, bool stale) { stale_[tip] = stale; }
   // The arm controller's deadman holds the wrist (no command of the controller's), until
   // `deadman_resume`, which stands for hand_node sending the current segment again.
-  void deadman_hold() { wrist_held_ = true; }
-  void deadman_resume() { wrist_held_ = false; }
+  void deadman_hold() { wrist_held_ = deadman_ = true; }
+  void deadman_resume() { wrist_held_ = deadman_ = false; }
+  // The next input says `holding` (a feedback that lags a command), the wrist moving on.
+  void report_holding_once() { holding_once_ = true; }
   void set_fresh(std::size_t tip, bool fresh) { fresh_[tip] = fresh; }
   const Vec3& finger_velocity(std::size_t tip) const { return finger_velocity_[tip]; }
 
@@ -116,7 +118,9 @@ class ScriptedRig {
     in.arm.wrist = wrist_;
     in.arm.active_segment_id = segment_.segment_id;
     in.arm.segment_done = segment_done_;
-    in.arm.holding = wrist_held_;
+    in.arm.holding = wrist_held_ || holding_once_;
+    holding_once_ = false;
+    in.arm.deadman = deadman_;
     in.now_s = now_s_;
     return in;
   }
@@ -202,6 +206,8 @@ class ScriptedRig {
   int segment_frames_ = 0;
   bool segment_done_ = false;
   bool wrist_held_ = false;
+  bool deadman_ = false;
+  bool holding_once_ = false;
   bool stopped_ = false;
   std::array<double, kFingertips> gap_mm_{};
   std::array<double, kFingertips> opening_m_{};

@@ -291,6 +291,8 @@ TEST(ArmState, SurvivesTheWire) {
   const control::ArmFeedback fb = to_feedback(got);
   EXPECT_EQ(fb.active_segment_id, 3U);
   EXPECT_TRUE(fb.segment_done);
+  EXPECT_TRUE(fb.holding);
+  EXPECT_TRUE(fb.deadman);
   msg.mutable_wrist()->set_yaw_rad(std::numeric_limits<double>::quiet_NaN());
   EXPECT_EQ(read_arm_state(msg, kIds, got), DecodeStatus::kInvalid);
 }

@@ -45,6 +45,9 @@ struct ArmFeedback {
   std::uint32_t active_segment_id = 0;
   bool segment_done = false;
   bool holding = false;
+  // The arm controller holds the arm because it heard nothing from us within its deadman (not
+  // a hold we asked for); set until we command again.
+  bool deadman = false;
   std::array<Vec3, kFingertips> fingertip_position_m{};  // wrist frame
 };
 
