@@ -12,8 +12,8 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
   if (warnings != nullptr) {
     for (const auto& k : root.unknown_keys({"format", "fingertips", "subscribe", "arm", "events",
                                             "heartbeat_period_s", "control_period_s",
-                                            "arm_timeout_s", "pair_window_s", "controller",
-                                            "security"})) {
+                                            "arm_timeout_s", "pair_window_s", "start_after_frames",
+                                            "controller", "security"})) {
       warnings->push_back(path.string() + ": unknown key '" + k + "' ignored");
     }
   }
@@ -68,6 +68,12 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
     root["pair_window_s"].fail("must be 0 (off) or a number of seconds up to 1 (keep it below half "
                                "the frame period), is " +
                                root["pair_window_s"].text());
+  }
+  if (auto n = root.find("start_after_frames")) {
+    const std::int64_t v = n->as_int();
+    if (v < 1 || v > 10000)
+      n->fail("must be a whole number of frames from 1 to 10000, is " + n->text());
+    cfg.start_after_frames = static_cast<int>(v);
   }
   if (auto c = root.find("controller"))
     cfg.controller = config::parse_controller_config(*c, warnings);

@@ -34,6 +34,10 @@ struct HandConfig {
   // A frame waits at most this long for the other fingertip's frame of the same exposure
   // (received by sensor_node this close together); 0: the controller runs on every frame.
   double pair_window_s = 0.002;
+  // The task starts once each fingertip has sent this many whole frames (and the arm answered):
+  // a camera's first frames after its stream starts come late and in bursts, and the task's
+  // first command should not answer them.
+  int start_after_frames = 20;
   control::Config controller;
   // CURVE on both links (docs/security.md); unset: plain TCP.
   std::optional<wire::ClientSecurity> sensor_security;  // SUB: the sensor_node's public key

@@ -55,7 +55,7 @@ void HandNode::send_envelope() {
   }
 }
 
-void HandNode::send_command(const control::Command& c, std::int64_t now_ns) {
+void HandNode::send_command(const control::Command& c, std::int64_t now_ns, bool names_frames) {
   (void)now_ns;
   switch (c.kind) {
     case control::CommandKind::kMoveTo:
@@ -74,7 +74,8 @@ void HandNode::send_command(const control::Command& c, std::int64_t now_ns) {
       break;
   }
   v1::ArmCommand& cmd = *out_.mutable_arm_command();
-  wire::fill_arm_command(c, ++command_sequence_, util::realtime_ns(), answers(), ids_, cmd);
+  wire::fill_arm_command(c, ++command_sequence_, util::realtime_ns(),
+                         names_frames ? answers() : wire::Answers{}, ids_, cmd);
   // When each answered frame arrived here: splits latency into transport and control.
   for (v1::FrameRef& r : *cmd.mutable_answers())
     r.set_receive_timestamp_ns(r.sensor_id() == ids_[0] ? received_ns_[0] : received_ns_[1]);
@@ -132,6 +133,7 @@ void HandNode::on_topic_message() {
   }
   ++counters_.frames[ki];
   have_frame_[ki] = true;
+  if (!started_ && frames_before_start_[ki] < cfg_.start_after_frames) ++frames_before_start_[ki];
   received_ns_[ki] = received_ns;
   const std::int64_t now = util::monotonic_ns();
   last_whole_ns_[ki] = now;
@@ -188,16 +190,20 @@ void HandNode::on_arm_message() {
 
 bool HandNode::ready(std::int64_t now_ns) {
   if (started_) return true;
-  if (have_arm_ && have_frame_[0] && have_frame_[1]) {
+  if (have_arm_ && frames_before_start_[0] >= cfg_.start_after_frames &&
+      frames_before_start_[1] >= cfg_.start_after_frames) {
     started_ = true;
     start_ns_ = now_ns;
-    util::log_info("arm controller and both fingertips ({}, {}) are live: starting the task ({})",
-                   ids_[0], ids_[1], control::to_string(cfg_.controller.task));
+    util::log_info(
+        "arm controller and both fingertips ({}, {}) are live ({} whole frames each): starting "
+        "the task ({})",
+        ids_[0], ids_[1], cfg_.start_after_frames, control::to_string(cfg_.controller.task));
     return true;
   }
   if (!waiting_reported_) {
-    util::log_info("waiting for the arm controller at {} and tactile frames of {} and {}", cfg_.arm,
-                   ids_[0], ids_[1]);
+    util::log_info(
+        "waiting for the arm controller at {} and {} whole tactile frames each of {} and {}",
+        cfg_.arm, cfg_.start_after_frames, ids_[0], ids_[1]);
     waiting_reported_ = true;
   }
   return false;
@@ -292,7 +298,9 @@ Outcome HandNode::run() {
   }
   if (outcome == Outcome::kStopped) {
     util::log_info("stop requested: sending Stop to the arm");
-    send_command(control::Command::stop(), util::monotonic_ns());
+    // Not computed from any frame: it names none (the arm controller counts the latency of
+    // commands from the frames they name).
+    send_command(control::Command::stop(), util::monotonic_ns(), false);
   }
   util::log_info(
       "frames used {}/{}, skipped incomplete {}/{}, undecodable {}, commands {} (blocked {}), "

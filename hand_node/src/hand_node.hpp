@@ -44,7 +44,9 @@ class HandNode {
   void on_topic_message();
   void on_arm_message();
   void step(std::int64_t now_ns, FramePairing::Fresh fresh);
-  void send_command(const control::Command& c, std::int64_t now_ns);
+  // names_frames: the command answers the latest frames (it was computed from them); a Stop on
+  // a signal answers none.
+  void send_command(const control::Command& c, std::int64_t now_ns, bool names_frames = true);
   void send_heartbeat(std::int64_t now_ns);
   void send_envelope();
   wire::Answers answers() const;
@@ -70,6 +72,7 @@ class HandNode {
   wire::ReceivedCommand unused_;
 
   std::array<bool, control::kFingertips> have_frame_{};
+  std::array<int, control::kFingertips> frames_before_start_{};  // whole frames, until started_
   std::array<std::int64_t, control::kFingertips> last_whole_ns_{};
   std::array<std::int64_t, control::kFingertips> received_ns_{};  // CLOCK_REALTIME
   wire::ArmStateData arm_state_;

@@ -478,8 +478,12 @@ void write_node_configs(const Scenario& sc, const std::filesystem::path& dir,
       "heartbeat_period_s: {}\n"
       "# The rig's two cameras expose together: run the controller on both frames of an\n"
       "# exposure at once, waiting at most 0.4 periods for the second.\n"
-      "pair_window_s: {}\n",
-      sc.source, opt.deadman_s * 1e3, opt.deadman_s / 4, 0.4 / sc.camera.fps);
+      "pair_window_s: {}\n"
+      "# Between frames the controller runs only when a frame is half a period late: its timed\n"
+      "# transitions run on frames and answer fresh ones.\n"
+      "control_period_s: {}\n",
+      sc.source, opt.deadman_s * 1e3, opt.deadman_s / 4, 0.4 / sc.camera.fps,
+      1.5 / sc.camera.fps);
   hand += hand_controller_yaml(sc);
   util::write_file_atomic(dir / "hand_node.yaml", hand);
 }

@@ -174,6 +174,7 @@ struct RunResult {
   // Commands whose two answers are frames of different exposures (camera timestamps).
   std::uint64_t commands_answering_two_exposures = 0;
   std::uint64_t heartbeats = 0;
+  std::size_t last_command_answers = 0;  // frames the last command names
   testing::ProcessResult process;
 };
 
@@ -288,6 +289,7 @@ class HandNodeRun {
         if (wire::read_arm_command(env.arm_command(), kIds, cmd) != wire::DecodeStatus::kOk)
           continue;
         last_command = cmd.sequence;
+        r.last_command_answers = cmd.answers.count;
         world.apply(cmd.command);
         r.commands.push_back(cmd.command.kind);
         std::set<int> tips;
@@ -510,6 +512,9 @@ TEST(HandNode, SendsStopOnSigterm) {
   EXPECT_EQ(r.process.exit_code, 0) << r.process.err;
   ASSERT_FALSE(r.commands.empty());
   EXPECT_EQ(r.commands.back(), control::CommandKind::kStop);
+  // The Stop answers no frame (it was not computed from one): the arm controller does not count
+  // its age as latency.
+  EXPECT_EQ(r.last_command_answers, 0U);
 }
 
 TEST(HandNode, BadConfigurationIsOneClearLine) {

@@ -1,5 +1,5 @@
-// hand_node's configuration: pair_window_s is read, defaults on, and a bad value is refused by
-// a line naming the file, the key and the value.
+// hand_node's configuration: pair_window_s and start_after_frames are read, default on, and a bad
+// value is refused by a line naming the file, the key and the value.
 #include "hand_config.hpp"
 
 #include <gtest/gtest.h>
@@ -43,6 +43,25 @@ TEST_F(HandConfigFile, PairWindowDefaultsOnAndIsRead) {
   EXPECT_DOUBLE_EQ(load_hand_config(write("pair_window_s: 0.0008\n"), &warnings).pair_window_s,
                    0.0008);
   EXPECT_TRUE(warnings.empty()) << warnings.front();
+}
+
+TEST_F(HandConfigFile, StartAfterFramesDefaultsTo20AndIsRead) {
+  std::vector<std::string> warnings;
+  EXPECT_EQ(load_hand_config(write(""), &warnings).start_after_frames, 20);
+  EXPECT_EQ(load_hand_config(write("start_after_frames: 1\n"), &warnings).start_after_frames, 1);
+  EXPECT_TRUE(warnings.empty()) << warnings.front();
+  for (const char* bad : {"0", "-3", "2.5", "many", "10001"}) {
+    const fs::path p = write(std::string("start_after_frames: ") + bad + "\n");
+    try {
+      load_hand_config(p, nullptr);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const config::ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(p.string()), std::string::npos) << what;
+      EXPECT_NE(what.find("start_after_frames"), std::string::npos) << what;
+      EXPECT_NE(what.find(bad), std::string::npos) << what;
+    }
+  }
 }
 
 TEST_F(HandConfigFile, BadPairWindowNamesFileKeyAndValue) {
