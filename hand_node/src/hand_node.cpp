@@ -261,8 +261,13 @@ Outcome HandNode::run() {
     std::int64_t until_tick = std::max<std::int64_t>(0, last_update_ns_ + period_ns - now);
     if (pairing_.any_waiting())
       until_tick = std::max<std::int64_t>(0, pairing_.deadline_ns() - now);
-    const auto wait =
-        std::chrono::milliseconds(std::min<std::int64_t>(until_tick / 1000000 + 1, 50));
+    // Heartbeats are due on time whatever the control period: the arm controller's deadman
+    // counts on them (with control_period_s above the frame period, frames alone would wake
+    // this loop only once a period).
+    const std::int64_t until_heartbeat =
+        std::max<std::int64_t>(0, last_sent_ns_ + heartbeat_ns - now);
+    const auto wait = std::chrono::milliseconds(
+        std::min<std::int64_t>(std::min(until_tick, until_heartbeat) / 1000000 + 1, 50));
     const std::int64_t poll_start = util::monotonic_ns();
     wire::poll_readable(sockets, wait);
     // Woken more than a control period later than asked: this process did not run (not

@@ -5,10 +5,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <functional>
 #include <map>
+#include <optional>
 #include <set>
 #include <thread>
 
@@ -175,6 +178,8 @@ struct RunResult {
   std::uint64_t commands_answering_two_exposures = 0;
   std::uint64_t heartbeats = 0;
   std::size_t last_command_answers = 0;  // frames the last command names
+  // The longest time without any message from hand_node on the arm link, after its first.
+  std::chrono::steady_clock::duration max_silence{};
   testing::ProcessResult process;
 };
 
@@ -183,7 +188,8 @@ struct RunResult {
 struct Injection {
   std::array<std::array<double, 2>, 2> slip{};
   std::array<bool, 2> publish{true, true};
-  int signal_hand = 0;  // a signal sent to hand_node before this frame is published
+  bool send_arm_state = true;  // the test arm controller's ArmState of this frame
+  int signal_hand = 0;         // a signal sent to hand_node before this frame is published
 };
 using Script = std::function<Injection(const SimWorld&, int frame)>;
 
@@ -196,7 +202,8 @@ struct Flood {
 
 class HandNodeRun {
  public:
-  explicit HandNodeRun(std::string controller_yaml = "") {
+  explicit HandNodeRun(std::string controller_yaml = "", double heartbeat_period_s = 0.05,
+                       double control_period_s = 0.005) {
     for (std::size_t t = 0; t < 2; ++t) {
       cals_[t] = fingertip_calibration(kIds[t]);
       config::save_calibration(dir_ / (kIds[t] + ".yaml"), cals_[t]);
@@ -205,7 +212,12 @@ class HandNodeRun {
                                          "fingertips:\n"
                                          "  - {sensor_id: left, calibration: left.yaml}\n"
                                          "  - {sensor_id: right, calibration: right.yaml}\n"
-                                         "heartbeat_period_s: 0.05\n"
+                                         "heartbeat_period_s: "
+                                      << heartbeat_period_s
+                                      << "\n"
+                                         "control_period_s: "
+                                      << control_period_s
+                                      << "\n"
                                          "controller:\n"
                                          "  stale_after_s: 0.03\n"
                                       << controller_yaml;
@@ -275,6 +287,7 @@ class HandNodeRun {
     const auto deadline = std::chrono::steady_clock::now() + limit;
     int frame = 0;
     bool signalled = false;
+    std::optional<std::chrono::steady_clock::time_point> last_heard;
     const double dt = 0.01;
     while (std::chrono::steady_clock::now() < deadline && hand.running()) {
       // The frame period paces the simulation; commands are taken as they come.
@@ -283,6 +296,9 @@ class HandNodeRun {
                          std::chrono::duration_cast<std::chrono::milliseconds>(
                              std::max(frame_end - std::chrono::steady_clock::now(),
                                       std::chrono::steady_clock::duration::zero())))) {
+        const auto heard = std::chrono::steady_clock::now();
+        if (last_heard) r.max_silence = std::max(r.max_silence, heard - *last_heard);
+        last_heard = heard;
         if (wire::decode(payload, env) != wire::DecodeStatus::kOk) continue;
         if (env.has_heartbeat()) ++r.heartbeats;
         if (!env.has_arm_command()) continue;
@@ -338,7 +354,7 @@ class HandNodeRun {
         published.insert({kIds[t], h.sequence});
       }
       world.note_contact();
-      if (!peer.empty()) {
+      if (!peer.empty() && inj.send_arm_state) {
         wire::fill_arm_state(world.state(last_command), kIds, *env.mutable_arm_state());
         wire::encode(env, out);
         arm.send(peer, bytes(out));
@@ -515,6 +531,32 @@ TEST(HandNode, SendsStopOnSigterm) {
   // The Stop answers no frame (it was not computed from one): the arm controller does not count
   // its age as latency.
   EXPECT_EQ(r.last_command_answers, 0U);
+}
+
+TEST(HandNode, HeartbeatsKeepTheirPeriodWhenNothingWakesIt) {
+  // A control period far above the heartbeat period (as when it is set above a slow camera's
+  // frame period): with neither frames nor ArmStates coming, only hand_node's own timing keeps
+  // the heartbeats going, and the arm controller's deadman counts on them. Waking only for the
+  // control period (at most every 50 ms) left 50 ms gaps here.
+  HandNodeRun run("", 0.01, 0.5);
+  const RunResult r = run.run(
+      [](const SimWorld&, int frame) {
+        Injection inj;
+        const bool quiet = frame >= 40;  // the task has started (20 frames each), then silence
+        inj.publish = {!quiet, !quiet};
+        inj.send_arm_state = !quiet;
+        if (frame == 100) inj.signal_hand = SIGTERM;
+        return inj;
+      },
+      20s);
+  ASSERT_FALSE(r.process.timed_out);
+  EXPECT_EQ(r.process.exit_code, 0) << r.process.err;
+  EXPECT_GT(r.heartbeats, 30U) << r.process.err;
+  const double max_silence_ms =
+      std::chrono::duration<double, std::milli>(r.max_silence).count();
+  EXPECT_LT(max_silence_ms, 40.0) << "heartbeat period 10 ms";
+  std::fprintf(stderr, "[measured] longest silence on the arm link %.1f ms (heartbeat 10 ms)\n",
+               max_silence_ms);
 }
 
 TEST(HandNode, BadConfigurationIsOneClearLine) {
