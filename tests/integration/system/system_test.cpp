@@ -186,7 +186,11 @@ TEST(ProcessFaults, SensorNodeKilledInTransportHoldsThenResumesFromItsSavedRefer
   ASSERT_GT(last_frame_ns, 0);
   const double waited_ms = static_cast<double>(stale->time_ns() - last_frame_ns) * 1e-6;
   const double period_ms = frame_period_ms();
-  EXPECT_LE(waited_ms, 3 * period_ms + 3 * period_ms + 10.0)
+  // Built with the sanitizers (30 fps, programs two to three times slower) on a shared machine,
+  // hand_node's wake-ups come late by more than a period at times (293 ms was seen against 210):
+  // six more periods there. The promise itself is checked by the Release build.
+  const double sanitizer_periods = TACTILE_SYSTEM_SANITIZED ? 6.0 : 0.0;
+  EXPECT_LE(waited_ms, 3 * period_ms + 3 * period_ms + sanitizer_periods * period_ms + 10.0)
       << "STALE_HOLD " << waited_ms << " ms after the last frame";
   // While held, the cap (in the hand, mid-transport) does not move.
   const auto before = s.cap_position(500ms);
