@@ -33,6 +33,19 @@ class HandConfigFile : public ::testing::Test {
                      << extra;
     return p;
   }
+  // `key: value` is refused by one line naming the file, the key and the value.
+  void expect_refused(const std::string& key, const std::string& value) {
+    const fs::path p = write(key + ": " + value + "\n");
+    try {
+      load_hand_config(p, nullptr);
+      ADD_FAILURE() << key << ": " << value << " was accepted";
+    } catch (const config::ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(p.string()), std::string::npos) << what;
+      EXPECT_NE(what.find(key), std::string::npos) << what;
+      EXPECT_NE(what.find(value), std::string::npos) << what;
+    }
+  }
   testing::TempDir dir_;
 };
 
@@ -50,33 +63,13 @@ TEST_F(HandConfigFile, StartAfterFramesDefaultsTo20AndIsRead) {
   EXPECT_EQ(load_hand_config(write(""), &warnings).start_after_frames, 20);
   EXPECT_EQ(load_hand_config(write("start_after_frames: 1\n"), &warnings).start_after_frames, 1);
   EXPECT_TRUE(warnings.empty()) << warnings.front();
-  for (const char* bad : {"0", "-3", "2.5", "many", "10001"}) {
-    const fs::path p = write(std::string("start_after_frames: ") + bad + "\n");
-    try {
-      load_hand_config(p, nullptr);
-      ADD_FAILURE() << bad << " was accepted";
-    } catch (const config::ConfigError& e) {
-      const std::string what = e.what();
-      EXPECT_NE(what.find(p.string()), std::string::npos) << what;
-      EXPECT_NE(what.find("start_after_frames"), std::string::npos) << what;
-      EXPECT_NE(what.find(bad), std::string::npos) << what;
-    }
-  }
+  for (const char* bad : {"0", "-3", "2.5", "many", "10001"})
+    expect_refused("start_after_frames", bad);
 }
 
 TEST_F(HandConfigFile, BadPairWindowNamesFileKeyAndValue) {
-  for (const char* bad : {"-0.5", "2", "soon"}) {
-    const fs::path p = write(std::string("pair_window_s: ") + bad + "\n");
-    try {
-      load_hand_config(p, nullptr);
-      ADD_FAILURE() << bad << " was accepted";
-    } catch (const config::ConfigError& e) {
-      const std::string what = e.what();
-      EXPECT_NE(what.find(p.string()), std::string::npos) << what;
-      EXPECT_NE(what.find("pair_window_s"), std::string::npos) << what;
-      EXPECT_NE(what.find(bad), std::string::npos) << what;
-    }
-  }
+  for (const char* bad : {"-0.5", "2", "soon"})
+    expect_refused("pair_window_s", bad);
 }
 
 }  // namespace
