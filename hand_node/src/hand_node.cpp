@@ -133,7 +133,6 @@ void HandNode::on_topic_message() {
   }
   ++counters_.frames[ki];
   have_frame_[ki] = true;
-  if (!started_ && frames_before_start_[ki] < cfg_.start_after_frames) ++frames_before_start_[ki];
   received_ns_[ki] = received_ns;
   const std::int64_t now = util::monotonic_ns();
   last_whole_ns_[ki] = now;
@@ -190,8 +189,8 @@ void HandNode::on_arm_message() {
 
 bool HandNode::ready(std::int64_t now_ns) {
   if (started_) return true;
-  if (have_arm_ && frames_before_start_[0] >= cfg_.start_after_frames &&
-      frames_before_start_[1] >= cfg_.start_after_frames) {
+  const auto enough = static_cast<std::uint64_t>(cfg_.start_after_frames);
+  if (have_arm_ && counters_.frames[0] >= enough && counters_.frames[1] >= enough) {
     started_ = true;
     start_ns_ = now_ns;
     util::log_info(

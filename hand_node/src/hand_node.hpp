@@ -72,7 +72,6 @@ class HandNode {
   wire::ReceivedCommand unused_;
 
   std::array<bool, control::kFingertips> have_frame_{};
-  std::array<int, control::kFingertips> frames_before_start_{};  // whole frames, until started_
   std::array<std::int64_t, control::kFingertips> last_whole_ns_{};
   std::array<std::int64_t, control::kFingertips> received_ns_{};  // CLOCK_REALTIME
   wire::ArmStateData arm_state_;
