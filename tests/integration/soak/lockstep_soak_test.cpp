@@ -3,7 +3,7 @@
 // carries over from one run to the next), the process's memory must stay within a bound
 // measured after the first runs, and the per-frame scores must add up to the totals.
 // TACTILE_SOAK_SIM_S overrides the simulated time (s). Built with the sanitizers
-// (TACTILE_SOAK_SANITIZED): 5 simulated minutes, AddressSanitizer's quarantine of freed memory
+// (TACTILE_SANITIZED): 5 simulated minutes, AddressSanitizer's quarantine of freed memory
 // kept to 1 MB, or its filling (256 MB by default) would be the memory growth measured, and no
 // check of the CPU per simulated second (printed; the Release build checks it).
 #include <gtest/gtest.h>
@@ -18,7 +18,7 @@
 #include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/scenario.hpp"
 
-#ifdef TACTILE_SOAK_SANITIZED
+#if TACTILE_SANITIZED
 // Read by AddressSanitizer at start-up; ASAN_OPTIONS in the environment still overrides it.
 extern "C" const char* __asan_default_options() { return "quarantine_size_mb=1"; }
 #endif
@@ -45,7 +45,7 @@ double cpu_s() {
 
 double soak_sim_s() {
   const char* v = std::getenv("TACTILE_SOAK_SIM_S");
-#ifdef TACTILE_SOAK_SANITIZED
+#if TACTILE_SANITIZED
   constexpr double kDefault = 5.0 * 60.0;  // two to three times slower under the sanitizers
 #else
   constexpr double kDefault = 30.0 * 60.0;
@@ -119,7 +119,7 @@ TEST(LockstepSoak, ThirtySimulatedMinutesSameReportEveryTimeMemoryBoundedScoresA
       median_of({cpu_per_sim_s.begin(), cpu_per_sim_s.begin() + static_cast<long>(third)});
   const double late =
       median_of({cpu_per_sim_s.end() - static_cast<long>(third), cpu_per_sim_s.end()});
-#ifndef TACTILE_SOAK_SANITIZED
+#if !TACTILE_SANITIZED
   // Not under the sanitizers: five or six runs whose CPU time on a loaded machine, with
   // AddressSanitizer's bookkeeping, varies more than the drift this looks for (1.61 times was
   // seen in CI with other work beside it).

@@ -5,7 +5,7 @@
 // camera frame gives exactly one TactileFrame and none is lost on the way (sequence numbers
 // without gaps, each interval's SensorStats matching the frames that came). Runs in a private
 // network namespace (127.0.0.2 and 127.0.0.3 on lo). TACTILE_SOAK_REALTIME_S overrides the
-// wall time (s). Built with the sanitizers (TACTILE_SOAK_SANITIZED): three minutes at 30 fps
+// wall time (s). Built with the sanitizers (TACTILE_SANITIZED): three minutes at 30 fps
 // (TACTILE_SYSTEM_SCENARIO), the p99 bounds scaled to that rate, and the programs'
 // AddressSanitizer quarantine of freed memory kept to 1 MB, or its filling (256 MB by default)
 // would be the memory growth measured.
@@ -44,7 +44,7 @@ long resident_kb(pid_t pid) {
 
 double soak_s() {
   const char* v = std::getenv("TACTILE_SOAK_REALTIME_S");
-#ifdef TACTILE_SOAK_SANITIZED
+#if TACTILE_SANITIZED
   constexpr double kDefault = 180.0;
 #else
   constexpr double kDefault = 600.0;
@@ -73,7 +73,7 @@ struct Stream {
 TEST(RealtimeSoak, TenMinutesOfRunsMemoryBoundedLatencySteadyCountersAddUp) {
   // quick.yaml, or its 30 fps twin when built with the sanitizers.
   const std::string scenario = TACTILE_SYSTEM_SCENARIO;
-#ifdef TACTILE_SOAK_SANITIZED
+#if TACTILE_SANITIZED
   {
     // The programs started below inherit it (appended, it wins over a quarantine set before).
     const char* given = std::getenv("ASAN_OPTIONS");
@@ -208,7 +208,7 @@ TEST(RealtimeSoak, TenMinutesOfRunsMemoryBoundedLatencySteadyCountersAddUp) {
   EXPECT_LE(late, 3.0 * early + 2.0) << "latency p50 went from " << early << " to " << late;
   std::vector<double> sorted_p99s = p99s;
   std::sort(sorted_p99s.begin(), sorted_p99s.end(), std::greater<>());
-#ifdef TACTILE_SOAK_SANITIZED
+#if TACTILE_SANITIZED
   // At 30 fps with programs two to three times slower, p50 is about 28 ms and a loaded machine
   // gave p99s of 148 and 232 ms in one soak: the same check, scaled.
   constexpr double kOneRunP99Ms = 4000.0, kTwoRunsP99Ms = 400.0;

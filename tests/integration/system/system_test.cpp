@@ -189,7 +189,7 @@ TEST(ProcessFaults, SensorNodeKilledInTransportHoldsThenResumesFromItsSavedRefer
   // Built with the sanitizers (30 fps, programs two to three times slower) on a shared machine,
   // hand_node's wake-ups come late by more than a period at times (293 ms was seen against 210):
   // six more periods there. The promise itself is checked by the Release build.
-  const double sanitizer_periods = TACTILE_SYSTEM_SANITIZED ? 6.0 : 0.0;
+  const double sanitizer_periods = TACTILE_SANITIZED ? 6.0 : 0.0;
   EXPECT_LE(waited_ms, 3 * period_ms + 3 * period_ms + sanitizer_periods * period_ms + 10.0)
       << "STALE_HOLD " << waited_ms << " ms after the last frame";
   // While held, the cap (in the hand, mid-transport) does not move.
