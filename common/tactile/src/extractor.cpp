@@ -1,9 +1,7 @@
 #include "tactile/extractor.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
-#include <cstring>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -34,11 +32,6 @@ int floor_int(double v) {
   const int i = static_cast<int>(v);
   return i > v ? i - 1 : i;
 }
-
-// The kernels read up to 16 columns either side of the window (groups of 8 or 16): the weight
-// arrays have that much room before and after the block, zeroed by fixed-size copies.
-constexpr int kWeightPad = 16;
-constexpr float kZeros[kWeightPad] = {};
 
 double soft_edge(double half_width, double distance) {
   return std::clamp(half_width + 0.5 - std::abs(distance), 0.0, 1.0);
@@ -157,10 +150,12 @@ Extractor::Extractor(Calibration cal, ExtractorOptions options)
   int max_side = 1;
   for (const detail::Block& b : blocks_)
     max_side = std::max({max_side, b.width, b.height});
-  wx_.assign(static_cast<std::size_t>(max_side + 2 * kWeightPad), 0.0F);
+  // The Gaussian kernels' scratch: block columns with kGaussPad either side, window rows with
+  // kGaussPad after them.
+  wx_.assign(static_cast<std::size_t>(max_side + 2 * detail::kGaussPad), 0.0F);
   wxu_ = wx_;
   wxu2_ = wx_;
-  wy_.assign(static_cast<std::size_t>(max_side), 0.0F);
+  wy_.assign(static_cast<std::size_t>(max_side + detail::kGaussPad), 0.0F);
   capture_sum_.assign(static_cast<std::size_t>(cal_.width) * static_cast<std::size_t>(cal_.height),
                       0);
   state_.assign(cal_.elements.size(), ElementState{});
@@ -450,44 +445,6 @@ bool Extractor::windowed_pass(const ElementLayout& el, const ImageView& f, doubl
   return true;
 }
 
-// exp(x) for x in [-87, 0], to about 3e-7 relative, without branches or library calls, so that
-// loops over it vectorise: x = n ln 2 + r with |r| <= ln 2 / 2, a degree-6 polynomial for
-// exp(r), 2^n put into the exponent bits.
-static float exp_nonpositive(float x) noexcept {
-  const float t = x * 1.44269504F;                                // x / ln 2, in [-125.6, 0]
-  const auto n = static_cast<float>(static_cast<int>(t - 0.5F));  // nearest integer, t <= 0
-  const float r = (x - n * 0.693145752F) - n * 1.42860677e-6F;    // ln 2 in two parts
-  float p = 1.0F / 720;
-  p = p * r + 1.0F / 120;
-  p = p * r + 1.0F / 24;
-  p = p * r + 1.0F / 6;
-  p = p * r + 0.5F;
-  p = p * r + 1.0F;
-  p = p * r + 1.0F;
-  const auto scale =
-      std::bit_cast<float>(static_cast<std::uint32_t>(static_cast<int>(n) + 127) << 23);
-  return p * scale;
-}
-
-// Fills w[k] = exp(-a u^2), u = first + k - c, for k in [0, n), and with kMoments w*u and w*u^2
-// beside it (a = 1 / (2 s^2)). Each weight on its own: no drift along the window, and the same
-// to the last bit on both sides of c.
-template <bool kMoments>
-static void gaussian_weights(int first, int n, double c, double a, float* w, float* wu,
-                             float* wu2) noexcept {
-  const auto af = static_cast<float>(a);
-  const auto u0 = static_cast<float>(first - c);
-  for (int k = 0; k < n; ++k) {
-    const float u = u0 + static_cast<float>(k);
-    const float wk = exp_nonpositive(-af * u * u);
-    w[k] = wk;
-    if constexpr (kMoments) {
-      wu[k] = wk * u;
-      wu2[k] = wk * u * u;
-    }
-  }
-}
-
 template <typename Pixel>
 bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x, double& y,
                               double& sigma) noexcept {
@@ -504,21 +461,18 @@ bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x
   const int col_lo = std::max(b.x0, ceil_int(x - r));
   const int col_hi = std::min(b.x0 + b.width - 1, floor_int(x + r));
   if (row_hi < row_lo || col_hi < col_lo) return false;
-  // Column weights, 0 outside the window up to kWeightPad columns either side.
-  const int first = col_lo - b.x0;
-  const int end = col_hi - b.x0 + 1;
-  float* wx = wx_.data() + kWeightPad;
-  float* wxu = wxu_.data() + kWeightPad;
-  float* wxu2 = wxu2_.data() + kWeightPad;
-  for (float* v : {wx, wxu, wxu2}) {
-    std::memcpy(v + first - kWeightPad, kZeros, sizeof kZeros);
-    std::memcpy(v + end, kZeros, sizeof kZeros);
-  }
   const double a = 1.0 / (2.0 * s * s);
-  gaussian_weights<true>(col_lo, end - first, x, a, wx + first, wxu + first, wxu2 + first);
-  gaussian_weights<false>(row_lo, row_hi - row_lo + 1, y, a, wy_.data(), nullptr, nullptr);
-
-  const detail::GaussWindow win{row_lo, row_hi, col_lo, col_hi, y, wx, wxu, wxu2, wy_.data()};
+  const detail::GaussWindow win{row_lo,
+                                row_hi,
+                                col_lo,
+                                col_hi,
+                                x,
+                                y,
+                                a,
+                                wx_.data() + detail::kGaussPad,
+                                wxu_.data() + detail::kGaussPad,
+                                wxu2_.data() + detail::kGaussPad,
+                                wy_.data()};
   const detail::GaussSums g = sizeof(Pixel) == 1
                                   ? kernels_->gauss_u8(b, frame_ref(f), block_data(), win)
                                   : kernels_->gauss_u16(b, frame_ref(f), block_data(), win);

@@ -275,10 +275,42 @@ template <typename Pixel>
 
 // --- Gaussian-weighted score -------------------------------------------------------------------
 
+// Fills w[k] = exp(-a u^2), u = first + k - c, for k in [0, n), and with kMoments w*u and w*u^2
+// beside it. Each weight on its own: no drift along the window, and the same to the last bit on
+// both sides of c.
+template <bool kMoments>
+[[gnu::always_inline]] inline void gaussian_weights(int first, int n, double c, double a, float* w,
+                                                    float* wu, float* wu2) noexcept {
+  const auto af = static_cast<float>(a);
+  const auto u0 = static_cast<float>(first - c);
+  for (int k = 0; k < n; ++k) {
+    const float u = u0 + static_cast<float>(k);
+    const float wk = exp_nonpositive(-af * u * u);
+    w[k] = wk;
+    if constexpr (kMoments) {
+      wu[k] = wk * u;
+      wu2[k] = wk * u * u;
+    }
+  }
+}
+
+constexpr float kZeros[kGaussPad] = {};
+
 template <typename Pixel>
 [[gnu::always_inline]] inline GaussSums gauss_body(const Block& b, const FrameRef& f,
                                                    const BlockData& data,
                                                    const GaussWindow& w) noexcept {
+  // Column weights over the window, 0 for kGaussPad columns either side (the groups below read
+  // up to 15 columns beyond it); row weights over the window's rows.
+  const int first = w.col_lo - b.x0;
+  const int end = w.col_hi - b.x0 + 1;
+  for (float* v : {w.wx, w.wxu, w.wxu2}) {
+    std::memcpy(v + first - kGaussPad, kZeros, sizeof kZeros);
+    std::memcpy(v + end, kZeros, sizeof kZeros);
+  }
+  gaussian_weights<true>(w.col_lo, end - first, w.cx, w.a, w.wx + first, w.wxu + first,
+                         w.wxu2 + first);
+  gaussian_weights<false>(w.row_lo, w.row_hi - w.row_lo + 1, w.cy, w.a, w.wy, nullptr, nullptr);
   const std::int32_t* ref = data.ref;
   // Columns of the block to read: the window, widened to whole groups of 16 (weights outside
   // the window are 0).

@@ -8,6 +8,7 @@
 // allocates nothing and reads only the block it is given.
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #include "tactile/detail/span.hpp"
 
@@ -78,10 +79,13 @@ enum class MomentKind : std::uint8_t {
 // Sums of the Gaussian-weighted score of one element over the block rows [row_lo, row_hi]
 // (image rows) and the block columns that meet [col_lo, col_hi], with the raw increment
 // d = 256 p - ref of the disk's pixels (negative values included): with u = x - cx, v = y - cy
-// and separable weights W = wx(x) wy(y),
+// and separable weights W = wx(x) wy(y), wx(x) = exp(-a u^2), wy(y) = exp(-a v^2),
 //   s0 = sum d W, s1x = sum d W u, s2x = sum d W u^2, s1y = sum d W v, s2y = sum d W v^2.
-// wx, wxu and wxu2 hold one value per block column (0 outside the window); wy one per window
-// row, starting at row_lo.
+// The kernel computes the weights itself into the scratch arrays: wx, wxu and wxu2 one value per
+// block column, with kGaussPad writable columns either side (at least block width + 2 kGaussPad
+// floats from wx - kGaussPad); wy one per window row plus kGaussPad. The window keeps
+// -a u^2 >= -72 (reach at most 12 sigmas).
+inline constexpr int kGaussPad = 16;
 struct GaussSums {
   double s0 = 0, s1x = 0, s2x = 0, s1y = 0, s2y = 0;
 };
@@ -90,12 +94,35 @@ struct GaussWindow {
   int row_hi;
   int col_lo;
   int col_hi;
+  double cx;
   double cy;
-  const float* wx;
-  const float* wxu;
-  const float* wxu2;
-  const float* wy;
+  double a;
+  float* wx;
+  float* wxu;
+  float* wxu2;
+  float* wy;
 };
+
+// exp(x) for x in [-87, 0], to about 3e-7 relative, without branches or library calls, so that
+// loops over it vectorise: x = n ln 2 + r with |r| <= ln 2 / 2, a degree-6 polynomial for
+// exp(r), 2^n put into the exponent bits. The AVX2 kernels compute the same polynomial eight
+// lanes at a time.
+inline float exp_nonpositive(float x) noexcept {
+  const float t = x * 1.44269504F;                                // x / ln 2, in [-125.6, 0]
+  const auto n = static_cast<float>(static_cast<int>(t - 0.5F));  // nearest integer, t <= 0
+  const float r = (x - n * 0.693145752F) - n * 1.42860677e-6F;    // ln 2 in two parts
+  float p = 1.0F / 720;
+  p = p * r + 1.0F / 120;
+  p = p * r + 1.0F / 24;
+  p = p * r + 1.0F / 6;
+  p = p * r + 0.5F;
+  p = p * r + 1.0F;
+  p = p * r + 1.0F;
+  std::uint32_t bits = static_cast<std::uint32_t>(static_cast<int>(n) + 127) << 23;
+  float scale;
+  std::memcpy(&scale, &bits, sizeof scale);
+  return p * scale;
+}
 
 // One implementation of every kernel.
 struct KernelSet {

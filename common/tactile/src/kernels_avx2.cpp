@@ -278,16 +278,63 @@ TACTILE_AVX2_INLINE void gauss_group(const std::uint8_t* p, const std::uint16_t*
   s2 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wxu2 + k), s2);
 }
 
+// exp_nonpositive, eight lanes at a time (the same steps; the polynomial with fused
+// multiply-adds, so the last bit may differ).
+TACTILE_AVX2_INLINE __m256 exp8_nonpositive(__m256 x) noexcept {
+  const __m256 t = _mm256_mul_ps(x, _mm256_set1_ps(1.44269504F));
+  const __m256i ni = _mm256_cvttps_epi32(_mm256_sub_ps(t, _mm256_set1_ps(0.5F)));
+  const __m256 n = _mm256_cvtepi32_ps(ni);
+  const __m256 r = _mm256_sub_ps(_mm256_sub_ps(x, _mm256_mul_ps(n, _mm256_set1_ps(0.693145752F))),
+                                 _mm256_mul_ps(n, _mm256_set1_ps(1.42860677e-6F)));
+  __m256 p = _mm256_set1_ps(1.0F / 720);
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0F / 120));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0F / 24));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0F / 6));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(0.5F));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0F));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0F));
+  const __m256i scale = _mm256_slli_epi32(_mm256_add_epi32(ni, _mm256_set1_epi32(127)), 23);
+  return _mm256_mul_ps(p, _mm256_castsi256_ps(scale));
+}
+
 TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockData& d,
                                 const GaussWindow& w) noexcept {
   if (b.width % 8 != 0) return portable_kernels().gauss_u8(b, f, d, w);
   // Groups of 8 from the window's first column (unaligned), moved left where the last group
-  // would leave the block; the weights are 0 up to 8 columns either side of the window.
+  // would leave the block; the column weights are computed for exactly those groups, 0 outside
+  // the window, and read back from where they were stored.
   const int first = std::max(0, w.col_lo - b.x0);
   const int end = std::min(b.width, w.col_hi - b.x0 + 1);
   const int groups = (end - first + 7) / 8;
   const int c_lo = std::max(0, std::min(first, b.width - 8 * groups));
   const int c_hi = std::min(b.width, c_lo + 8 * groups);
+  const __m256 minus_a = _mm256_set1_ps(-static_cast<float>(w.a));
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256 lanef = _mm256_cvtepi32_ps(lane);
+  {
+    const __m256i first_v = _mm256_set1_epi32(first - 1);
+    const __m256i end_v = _mm256_set1_epi32(end);
+    const auto u_lo = static_cast<float>(b.x0 + c_lo - w.cx);
+    for (int k = c_lo; k < c_hi; k += 8) {
+      const __m256i col = _mm256_add_epi32(_mm256_set1_epi32(k), lane);
+      const __m256i in = _mm256_and_si256(_mm256_cmpgt_epi32(col, first_v),
+                                          _mm256_cmpgt_epi32(end_v, col));
+      const __m256 u =
+          _mm256_add_ps(_mm256_set1_ps(u_lo + static_cast<float>(k - c_lo)), lanef);
+      const __m256 wk = _mm256_and_ps(exp8_nonpositive(_mm256_mul_ps(_mm256_mul_ps(minus_a, u), u)),
+                                      _mm256_castsi256_ps(in));
+      const __m256 wu = _mm256_mul_ps(wk, u);
+      _mm256_storeu_ps(w.wx + k, wk);
+      _mm256_storeu_ps(w.wxu + k, wu);
+      _mm256_storeu_ps(w.wxu2 + k, _mm256_mul_ps(wu, u));
+    }
+    const int rows = w.row_hi - w.row_lo + 1;
+    const auto v_lo = static_cast<float>(w.row_lo - w.cy);
+    for (int j = 0; j < rows; j += 8) {
+      const __m256 v = _mm256_add_ps(_mm256_set1_ps(v_lo + static_cast<float>(j)), lanef);
+      _mm256_storeu_ps(w.wy + j, exp8_nonpositive(_mm256_mul_ps(_mm256_mul_ps(minus_a, v), v)));
+    }
+  }
   const __m256i outside = _mm256_set1_epi32(65535);
   __m256 t0 = _mm256_setzero_ps();
   __m256 t1x = _mm256_setzero_ps();
