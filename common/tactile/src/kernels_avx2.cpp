@@ -262,22 +262,6 @@ TACTILE_AVX2_INLINE double hsum(__m256 v) noexcept {
 
 // One group of 8 pixels of a row: d = 256 p - ref (0 outside the disk) times the column
 // weights, into three partial sums.
-TACTILE_AVX2_INLINE void gauss_group(const std::uint8_t* p, const std::uint16_t* rf,
-                                     const GaussWindow& w, int k, __m256i outside, __m256& s0,
-                                     __m256& s1, __m256& s2) noexcept {
-  const __m256i pv = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + k)));
-  const __m256i rv =
-      _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(rf + k)));
-  // The reference of an 8-bit sensor is at most 65280 in Q8; 65535 marks the pixels outside
-  // the disk, which weigh nothing.
-  const __m256i dv = _mm256_andnot_si256(_mm256_cmpeq_epi32(rv, outside),
-                                         _mm256_sub_epi32(_mm256_slli_epi32(pv, 8), rv));
-  const __m256 df = _mm256_cvtepi32_ps(dv);
-  s0 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wx + k), s0);
-  s1 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wxu + k), s1);
-  s2 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wxu2 + k), s2);
-}
-
 // exp_nonpositive, eight lanes at a time (the same steps; the polynomial with fused
 // multiply-adds, so the last bit may differ).
 TACTILE_AVX2_INLINE __m256 exp8_nonpositive(__m256 x) noexcept {
@@ -297,6 +281,94 @@ TACTILE_AVX2_INLINE __m256 exp8_nonpositive(__m256 x) noexcept {
   return _mm256_mul_ps(p, _mm256_castsi256_ps(scale));
 }
 
+// d = 256 p - ref of 8 pixels of a row from column k, 0 outside the disk (the reference of an
+// 8-bit sensor is at most 65280 in Q8; 65535 marks the pixels outside the disk), as floats.
+TACTILE_AVX2_INLINE __m256 increments8(const std::uint8_t* p, const std::uint16_t* rf, int k,
+                                       __m256i outside) noexcept {
+  const __m256i pv = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + k)));
+  const __m256i rv =
+      _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(rf + k)));
+  return _mm256_cvtepi32_ps(_mm256_andnot_si256(_mm256_cmpeq_epi32(rv, outside),
+                                                _mm256_sub_epi32(_mm256_slli_epi32(pv, 8), rv)));
+}
+
+// Column weights of the group of 8 from block column k: exp(-a u^2) inside the window
+// [first, end), 0 outside; u, from the column's centre to the window's centre.
+TACTILE_AVX2_INLINE __m256 column_weights(const Block& b, const GaussWindow& w, int k, int first,
+                                          int end, __m256& u) noexcept {
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i col = _mm256_add_epi32(_mm256_set1_epi32(k), lane);
+  const __m256i in = _mm256_and_si256(_mm256_cmpgt_epi32(col, _mm256_set1_epi32(first - 1)),
+                                      _mm256_cmpgt_epi32(_mm256_set1_epi32(end), col));
+  u = _mm256_add_ps(_mm256_set1_ps(static_cast<float>(b.x0 + k - w.cx)), _mm256_cvtepi32_ps(lane));
+  const __m256 e = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(-static_cast<float>(w.a)), u), u);
+  return _mm256_and_ps(exp8_nonpositive(e), _mm256_castsi256_ps(in));
+}
+
+// The Gaussian sums of a window kGroups groups of 8 wide (up to 32 columns, the commonest),
+// column by column: each group's increments summed down the rows with the row weights
+// (wy, wy v, wy v^2), and only then weighed by the column weights, which stay in registers. The
+// row weights are in w.wy.
+template <int kGroups>
+TACTILE_AVX2_INLINE GaussSums gauss_columns(const Block& b, const FrameRef& f, const BlockData& d,
+                                            const GaussWindow& w, int c_lo, int first,
+                                            int end) noexcept {
+  const __m256i outside = _mm256_set1_epi32(65535);
+  __m256 c0[kGroups];
+  __m256 c1[kGroups];
+  __m256 c2[kGroups];
+  for (int g = 0; g < kGroups; ++g) {
+    c0[g] = _mm256_setzero_ps();
+    c1[g] = _mm256_setzero_ps();
+    c2[g] = _mm256_setzero_ps();
+  }
+  const std::uint8_t* p = f.pixel<std::uint8_t>(b.x0, w.row_lo);
+  const std::uint16_t* rf = d.ref16 + b.offset +
+                            static_cast<std::size_t>(w.row_lo - b.y0) *
+                                static_cast<std::size_t>(b.width);
+  const auto v0 = static_cast<float>(w.row_lo - w.cy);
+  const int rows = w.row_hi - w.row_lo + 1;
+  for (int j = 0; j < rows; ++j, p += f.stride, rf += b.width) {
+    const float wy = w.wy[j];
+    const float v = v0 + static_cast<float>(j);
+    const __m256 b0 = _mm256_set1_ps(wy);
+    const __m256 b1 = _mm256_set1_ps(wy * v);
+    const __m256 b2 = _mm256_set1_ps(wy * v * v);
+    for (int g = 0; g < kGroups; ++g) {
+      const __m256 dv = increments8(p, rf, c_lo + 8 * g, outside);
+      c0[g] = _mm256_fmadd_ps(dv, b0, c0[g]);
+      c1[g] = _mm256_fmadd_ps(dv, b1, c1[g]);
+      c2[g] = _mm256_fmadd_ps(dv, b2, c2[g]);
+    }
+  }
+  __m256 t0 = _mm256_setzero_ps();
+  __m256 t1x = _mm256_setzero_ps();
+  __m256 t2x = _mm256_setzero_ps();
+  __m256 t1y = _mm256_setzero_ps();
+  __m256 t2y = _mm256_setzero_ps();
+  for (int g = 0; g < kGroups; ++g) {
+    __m256 u;
+    const __m256 wx = column_weights(b, w, c_lo + 8 * g, first, end, u);
+    const __m256 wxu = _mm256_mul_ps(wx, u);
+    t0 = _mm256_fmadd_ps(c0[g], wx, t0);
+    t1x = _mm256_fmadd_ps(c0[g], wxu, t1x);
+    t2x = _mm256_fmadd_ps(c0[g], _mm256_mul_ps(wxu, u), t2x);
+    t1y = _mm256_fmadd_ps(c1[g], wx, t1y);
+    t2y = _mm256_fmadd_ps(c2[g], wx, t2y);
+  }
+  return {hsum(t0), hsum(t1x), hsum(t2x), hsum(t1y), hsum(t2y)};
+}
+
+// One group of 8 pixels of a row times the stored column weights, into three partial sums.
+TACTILE_AVX2_INLINE void gauss_group(const std::uint8_t* p, const std::uint16_t* rf,
+                                     const GaussWindow& w, int k, __m256i outside, __m256& s0,
+                                     __m256& s1, __m256& s2) noexcept {
+  const __m256 df = increments8(p, rf, k, outside);
+  s0 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wx + k), s0);
+  s1 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wxu + k), s1);
+  s2 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wxu2 + k), s2);
+}
+
 TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockData& d,
                                 const GaussWindow& w) noexcept {
   if (b.width % 8 != 0) return portable_kernels().gauss_u8(b, f, d, w);
@@ -308,32 +380,36 @@ TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockDa
   const int groups = (end - first + 7) / 8;
   const int c_lo = std::max(0, std::min(first, b.width - 8 * groups));
   const int c_hi = std::min(b.width, c_lo + 8 * groups);
-  const __m256 minus_a = _mm256_set1_ps(-static_cast<float>(w.a));
-  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  const __m256 lanef = _mm256_cvtepi32_ps(lane);
   {
-    const __m256i first_v = _mm256_set1_epi32(first - 1);
-    const __m256i end_v = _mm256_set1_epi32(end);
-    const auto u_lo = static_cast<float>(b.x0 + c_lo - w.cx);
-    for (int k = c_lo; k < c_hi; k += 8) {
-      const __m256i col = _mm256_add_epi32(_mm256_set1_epi32(k), lane);
-      const __m256i in = _mm256_and_si256(_mm256_cmpgt_epi32(col, first_v),
-                                          _mm256_cmpgt_epi32(end_v, col));
-      const __m256 u =
-          _mm256_add_ps(_mm256_set1_ps(u_lo + static_cast<float>(k - c_lo)), lanef);
-      const __m256 wk = _mm256_and_ps(exp8_nonpositive(_mm256_mul_ps(_mm256_mul_ps(minus_a, u), u)),
-                                      _mm256_castsi256_ps(in));
-      const __m256 wu = _mm256_mul_ps(wk, u);
-      _mm256_storeu_ps(w.wx + k, wk);
-      _mm256_storeu_ps(w.wxu + k, wu);
-      _mm256_storeu_ps(w.wxu2 + k, _mm256_mul_ps(wu, u));
-    }
+    const __m256 minus_a = _mm256_set1_ps(-static_cast<float>(w.a));
+    const __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
     const int rows = w.row_hi - w.row_lo + 1;
     const auto v_lo = static_cast<float>(w.row_lo - w.cy);
     for (int j = 0; j < rows; j += 8) {
-      const __m256 v = _mm256_add_ps(_mm256_set1_ps(v_lo + static_cast<float>(j)), lanef);
+      const __m256 v = _mm256_add_ps(_mm256_set1_ps(v_lo + static_cast<float>(j)), lane);
       _mm256_storeu_ps(w.wy + j, exp8_nonpositive(_mm256_mul_ps(_mm256_mul_ps(minus_a, v), v)));
     }
+  }
+  switch (groups) {
+    case 1:
+      return gauss_columns<1>(b, f, d, w, c_lo, first, end);
+    case 2:
+      return gauss_columns<2>(b, f, d, w, c_lo, first, end);
+    case 3:
+      return gauss_columns<3>(b, f, d, w, c_lo, first, end);
+    case 4:
+      return gauss_columns<4>(b, f, d, w, c_lo, first, end);
+    default:
+      break;
+  }
+  // Wider windows: the column weights stored once, read back in every row.
+  for (int k = c_lo; k < c_hi; k += 8) {
+    __m256 u;
+    const __m256 wk = column_weights(b, w, k, first, end, u);
+    const __m256 wu = _mm256_mul_ps(wk, u);
+    _mm256_storeu_ps(w.wx + k, wk);
+    _mm256_storeu_ps(w.wxu + k, wu);
+    _mm256_storeu_ps(w.wxu2 + k, _mm256_mul_ps(wu, u));
   }
   const __m256i outside = _mm256_set1_epi32(65535);
   __m256 t0 = _mm256_setzero_ps();
