@@ -8,19 +8,32 @@
 namespace tactile {
 
 PiecewiseLinear::PiecewiseLinear(std::vector<double> x, std::vector<double> y)
-    : x_(std::move(x)), y_(std::move(y)) {}
+    : x_(std::move(x)), y_(std::move(y)) {
+  const std::size_t n = std::min(x_.size(), y_.size());
+  slope_.assign(n > 1 ? n - 1 : 0, 0.0);
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const double dx = x_[k + 1] - x_[k];
+    slope_[k] = dx > 0.0 ? (y_[k + 1] - y_[k]) / dx : 0.0;
+  }
+}
 
 double PiecewiseLinear::operator()(double x) const noexcept {
-  const std::size_t n = std::min(x_.size(), y_.size());
-  if (n == 0) return 0.0;
-  if (n == 1) return y_[0];
-  // Segment k covers [x_k, x_{k+1}]; the outer segments extend to infinity both ways.
-  const auto it = std::upper_bound(x_.begin(), x_.begin() + static_cast<std::ptrdiff_t>(n), x);
-  std::size_t k = static_cast<std::size_t>(it - x_.begin());
-  k = std::clamp<std::size_t>(k, 1, n - 1) - 1;
-  const double dx = x_[k + 1] - x_[k];
-  const double slope = dx > 0.0 ? (y_[k + 1] - y_[k]) / dx : 0.0;
-  const double v = y_[k] + slope * (x - x_[k]);
+  if (slope_.empty()) return y_.empty() || x_.empty() ? 0.0 : y_[0];
+  const std::size_t n = slope_.size() + 1;
+  // Segment k covers [x_k, x_{k+1}]; the outer segments extend to infinity both ways: k is the
+  // number of inner knots x_1 .. x_{n-2} at or below x, by a binary search without branches (x
+  // jumps between segments from one call to the next, which defeats branch prediction).
+  const double* const inner = x_.data() + 1;
+  const double* base = inner;
+  std::size_t len = n - 2;
+  while (len > 1) {
+    const std::size_t half = len / 2;
+    base = base[half - 1] <= x ? base + half : base;
+    len -= half;
+  }
+  const std::size_t k =
+      static_cast<std::size_t>(base - inner) + (len == 1 && base[0] <= x ? 1 : 0);
+  const double v = y_[k] + slope_[k] * (x - x_[k]);
   return std::isfinite(v) ? v : (v > 0 ? y_[n - 1] : y_[0]);
 }
 

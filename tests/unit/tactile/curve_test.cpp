@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
+#include <vector>
 
 namespace tactile {
 namespace {
@@ -57,6 +60,45 @@ TEST(PiecewiseLinear, MonotonicEverywhere) {
     const double v = kNormal(g);
     EXPECT_GE(v, prev);
     prev = v;
+  }
+}
+
+// The curve's value by its definition: the segment found by upper_bound over all knots, the
+// outer segments extended.
+double by_definition(const std::vector<double>& x, const std::vector<double>& y, double v) {
+  if (x.size() == 1) return y[0];
+  const auto it = std::upper_bound(x.begin(), x.end(), v);
+  const std::size_t k =
+      std::clamp<std::size_t>(static_cast<std::size_t>(it - x.begin()), 1, x.size() - 1) - 1;
+  const double r = y[k] + (y[k + 1] - y[k]) / (x[k + 1] - x[k]) * (v - x[k]);
+  return std::isfinite(r) ? r : (r > 0 ? y.back() : y.front());
+}
+
+TEST(PiecewiseLinear, EverySegmentOfCurvesOfEverySize) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> step(0.01, 10.0);
+  for (std::size_t n = 1; n <= 40; ++n) {
+    std::vector<double> x(n), y(n);
+    double xs = -50, ys = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      x[i] = xs += step(rng);
+      y[i] = ys += step(rng);
+    }
+    const PiecewiseLinear c(x, y);
+    // Every knot exactly, both sides of it, and beyond both ends.
+    std::vector<double> probes = {x.front() - 100, x.back() + 100, -1e300, 1e300};
+    for (double k : x) {
+      probes.push_back(k);
+      probes.push_back(std::nextafter(k, -1e300));
+      probes.push_back(std::nextafter(k, 1e300));
+      probes.push_back(k + 0.5);
+    }
+    for (double v : probes) {
+      const double want = by_definition(x, y, v);
+      const double got = c(v);
+      ASSERT_EQ(got, want) << "n " << n << " x " << v;
+      ASSERT_TRUE(std::isfinite(got));
+    }
   }
 }
 

@@ -29,6 +29,7 @@ class PiecewiseLinear {
  private:
   std::vector<double> x_;
   std::vector<double> y_;
+  std::vector<double> slope_;  // of each segment, 0 where it has no width
 };
 
 }  // namespace tactile
