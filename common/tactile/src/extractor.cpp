@@ -462,6 +462,12 @@ bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x
   const int col_hi = std::min(b.x0 + b.width - 1, floor_int(x + r));
   if (row_hi < row_lo || col_hi < col_lo) return false;
   const double a = 1.0 / (2.0 * s * s);
+  // The window lies in the disk when its farthest corner does (with a margin for rounding: the
+  // disk's own test is exact).
+  const ElementCalibration& ec = cal_.elements[element];
+  const double far_x = std::max(ec.center_px.x - col_lo, col_hi - ec.center_px.x);
+  const double far_y = std::max(ec.center_px.y - row_lo, row_hi - ec.center_px.y);
+  const bool inside = far_x * far_x + far_y * far_y <= ec.radius_px * ec.radius_px * (1 - 1e-9);
   const detail::GaussWindow win{row_lo,
                                 row_hi,
                                 col_lo,
@@ -472,7 +478,8 @@ bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x
                                 wx_.data() + detail::kGaussPad,
                                 wxu_.data() + detail::kGaussPad,
                                 wxu2_.data() + detail::kGaussPad,
-                                wy_.data()};
+                                wy_.data(),
+                                inside};
   const detail::GaussSums g = sizeof(Pixel) == 1
                                   ? kernels_->gauss_u8(b, frame_ref(f), block_data(), win)
                                   : kernels_->gauss_u16(b, frame_ref(f), block_data(), win);

@@ -101,6 +101,8 @@ struct GaussWindow {
   float* wxu;
   float* wxu2;
   float* wy;
+  // Every pixel of the window lies in the disk (kernels may then skip the outside test).
+  bool inside_disk = false;
 };
 
 // exp(x) for x in [-87, 0], to about 3e-7 relative, without branches or library calls, so that

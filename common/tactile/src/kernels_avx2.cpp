@@ -281,15 +281,17 @@ TACTILE_AVX2_INLINE __m256 exp8_nonpositive(__m256 x) noexcept {
   return _mm256_mul_ps(p, _mm256_castsi256_ps(scale));
 }
 
-// d = 256 p - ref of 8 pixels of a row from column k, 0 outside the disk (the reference of an
-// 8-bit sensor is at most 65280 in Q8; 65535 marks the pixels outside the disk), as floats.
+// d = 256 p - ref of 8 pixels of a row from column k as floats; with kMasked 0 outside the disk
+// (the reference of an 8-bit sensor is at most 65280 in Q8; 65535 marks the pixels outside).
+template <bool kMasked = true>
 TACTILE_AVX2_INLINE __m256 increments8(const std::uint8_t* p, const std::uint16_t* rf, int k,
                                        __m256i outside) noexcept {
   const __m256i pv = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + k)));
   const __m256i rv =
       _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(rf + k)));
-  return _mm256_cvtepi32_ps(_mm256_andnot_si256(_mm256_cmpeq_epi32(rv, outside),
-                                                _mm256_sub_epi32(_mm256_slli_epi32(pv, 8), rv)));
+  const __m256i dv = _mm256_sub_epi32(_mm256_slli_epi32(pv, 8), rv);
+  if constexpr (!kMasked) return _mm256_cvtepi32_ps(dv);
+  return _mm256_cvtepi32_ps(_mm256_andnot_si256(_mm256_cmpeq_epi32(rv, outside), dv));
 }
 
 // Column weights of the group of 8 from block column k: exp(-a u^2) inside the window
@@ -308,8 +310,10 @@ TACTILE_AVX2_INLINE __m256 column_weights(const Block& b, const GaussWindow& w, 
 // The Gaussian sums of a window kGroups groups of 8 wide (up to 32 columns, the commonest),
 // column by column: each group's increments summed down the rows with the row weights
 // (wy, wy v, wy v^2), and only then weighed by the column weights, which stay in registers. The
-// row weights are in w.wy.
-template <int kGroups>
+// row weights are in w.wy. Without kMasked every pixel of the window must lie in the disk: the
+// groups' columns outside the window may not, but their increments are finite and their
+// column weights exactly 0.
+template <int kGroups, bool kMasked>
 TACTILE_AVX2_INLINE GaussSums gauss_columns(const Block& b, const FrameRef& f, const BlockData& d,
                                             const GaussWindow& w, int c_lo, int first,
                                             int end) noexcept {
@@ -335,7 +339,7 @@ TACTILE_AVX2_INLINE GaussSums gauss_columns(const Block& b, const FrameRef& f, c
     const __m256 b1 = _mm256_set1_ps(wy * v);
     const __m256 b2 = _mm256_set1_ps(wy * v * v);
     for (int g = 0; g < kGroups; ++g) {
-      const __m256 dv = increments8(p, rf, c_lo + 8 * g, outside);
+      const __m256 dv = increments8<kMasked>(p, rf, c_lo + 8 * g, outside);
       c0[g] = _mm256_fmadd_ps(dv, b0, c0[g]);
       c1[g] = _mm256_fmadd_ps(dv, b1, c1[g]);
       c2[g] = _mm256_fmadd_ps(dv, b2, c2[g]);
@@ -390,15 +394,23 @@ TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockDa
       _mm256_storeu_ps(w.wy + j, exp8_nonpositive(_mm256_mul_ps(_mm256_mul_ps(minus_a, v), v)));
     }
   }
-  switch (groups) {
-    case 1:
-      return gauss_columns<1>(b, f, d, w, c_lo, first, end);
+  switch (groups * 2 + (w.inside_disk ? 1 : 0)) {
     case 2:
-      return gauss_columns<2>(b, f, d, w, c_lo, first, end);
+      return gauss_columns<1, true>(b, f, d, w, c_lo, first, end);
     case 3:
-      return gauss_columns<3>(b, f, d, w, c_lo, first, end);
+      return gauss_columns<1, false>(b, f, d, w, c_lo, first, end);
     case 4:
-      return gauss_columns<4>(b, f, d, w, c_lo, first, end);
+      return gauss_columns<2, true>(b, f, d, w, c_lo, first, end);
+    case 5:
+      return gauss_columns<2, false>(b, f, d, w, c_lo, first, end);
+    case 6:
+      return gauss_columns<3, true>(b, f, d, w, c_lo, first, end);
+    case 7:
+      return gauss_columns<3, false>(b, f, d, w, c_lo, first, end);
+    case 8:
+      return gauss_columns<4, true>(b, f, d, w, c_lo, first, end);
+    case 9:
+      return gauss_columns<4, false>(b, f, d, w, c_lo, first, end);
     default:
       break;
   }
