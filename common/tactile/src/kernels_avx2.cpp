@@ -30,6 +30,16 @@ TACTILE_AVX2_INLINE __m256i widen_u32(__m256i v) noexcept {
                           _mm256_cvtepu32_epi64(_mm256_extracti128_si256(v, 1)));
 }
 
+// The largest of 32 byte lanes.
+TACTILE_AVX2_INLINE std::int32_t max_u8(__m256i v) noexcept {
+  __m128i m = _mm_max_epu8(_mm256_castsi256_si128(v), _mm256_extracti128_si256(v, 1));
+  m = _mm_max_epu8(m, _mm_srli_si128(m, 8));
+  m = _mm_max_epu8(m, _mm_srli_si128(m, 4));
+  m = _mm_max_epu8(m, _mm_srli_si128(m, 2));
+  m = _mm_max_epu8(m, _mm_srli_si128(m, 1));
+  return _mm_cvtsi128_si32(m) & 0xFF;
+}
+
 struct Sums8 {
   std::uint64_t s = 0, lo = 0, sx = 0, lx = 0, sy = 0, ly = 0;
   std::int64_t above = 0;
@@ -93,12 +103,7 @@ TACTILE_AVX2_INLINE Sums8 pass8_one_group(const Block& b, const FrameRef& f,
     out.lx = sum_u64(widen_u32(acc_lx));
     out.sy = rows * out.s - sum_u64(acc_ts);
     out.ly = rows * out.lo - sum_u64(acc_tl);
-    __m128i m = _mm_max_epu8(_mm256_castsi256_si128(peak), _mm256_extracti128_si256(peak, 1));
-    m = _mm_max_epu8(m, _mm_srli_si128(m, 8));
-    m = _mm_max_epu8(m, _mm_srli_si128(m, 4));
-    m = _mm_max_epu8(m, _mm_srli_si128(m, 2));
-    m = _mm_max_epu8(m, _mm_srli_si128(m, 1));
-    out.peak = _mm_cvtsi128_si32(m) & 0xFF;
+    out.peak = max_u8(peak);
   }
   out.above = above;
   return out;
@@ -196,12 +201,7 @@ TACTILE_AVX2_INLINE Sums8 pass8(const Block& b, const FrameRef& f, const std::ui
     out.lx = sum_u64(lx64) + sum_u64(acc_lg);
     out.sy = sum_u64(acc_sy);
     out.ly = sum_u64(acc_ly);
-    __m128i m = _mm_max_epu8(_mm256_castsi256_si128(peak), _mm256_extracti128_si256(peak, 1));
-    m = _mm_max_epu8(m, _mm_srli_si128(m, 8));
-    m = _mm_max_epu8(m, _mm_srli_si128(m, 4));
-    m = _mm_max_epu8(m, _mm_srli_si128(m, 2));
-    m = _mm_max_epu8(m, _mm_srli_si128(m, 1));
-    out.peak = _mm_cvtsi128_si32(m) & 0xFF;
+    out.peak = max_u8(peak);
   }
   out.above = above;
   return out;
@@ -363,6 +363,15 @@ TACTILE_AVX2_INLINE GaussSums gauss_columns(const Block& b, const FrameRef& f, c
   return {hsum(t0), hsum(t1x), hsum(t2x), hsum(t1y), hsum(t2y)};
 }
 
+// gauss_columns without the outside test where the window lies in the disk.
+template <int kGroups>
+TACTILE_AVX2_INLINE GaussSums gauss_columns_either(const Block& b, const FrameRef& f,
+                                                   const BlockData& d, const GaussWindow& w,
+                                                   int c_lo, int first, int end) noexcept {
+  return w.inside_disk ? gauss_columns<kGroups, false>(b, f, d, w, c_lo, first, end)
+                       : gauss_columns<kGroups, true>(b, f, d, w, c_lo, first, end);
+}
+
 // One group of 8 pixels of a row times the stored column weights, into three partial sums.
 TACTILE_AVX2_INLINE void gauss_group(const std::uint8_t* p, const std::uint16_t* rf,
                                      const GaussWindow& w, int k, __m256i outside, __m256& s0,
@@ -394,23 +403,15 @@ TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockDa
       _mm256_storeu_ps(w.wy + j, exp8_nonpositive(_mm256_mul_ps(_mm256_mul_ps(minus_a, v), v)));
     }
   }
-  switch (groups * 2 + (w.inside_disk ? 1 : 0)) {
+  switch (groups) {
+    case 1:
+      return gauss_columns_either<1>(b, f, d, w, c_lo, first, end);
     case 2:
-      return gauss_columns<1, true>(b, f, d, w, c_lo, first, end);
+      return gauss_columns_either<2>(b, f, d, w, c_lo, first, end);
     case 3:
-      return gauss_columns<1, false>(b, f, d, w, c_lo, first, end);
+      return gauss_columns_either<3>(b, f, d, w, c_lo, first, end);
     case 4:
-      return gauss_columns<2, true>(b, f, d, w, c_lo, first, end);
-    case 5:
-      return gauss_columns<2, false>(b, f, d, w, c_lo, first, end);
-    case 6:
-      return gauss_columns<3, true>(b, f, d, w, c_lo, first, end);
-    case 7:
-      return gauss_columns<3, false>(b, f, d, w, c_lo, first, end);
-    case 8:
-      return gauss_columns<4, true>(b, f, d, w, c_lo, first, end);
-    case 9:
-      return gauss_columns<4, false>(b, f, d, w, c_lo, first, end);
+      return gauss_columns_either<4>(b, f, d, w, c_lo, first, end);
     default:
       break;
   }
