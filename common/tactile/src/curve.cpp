@@ -31,8 +31,7 @@ double PiecewiseLinear::operator()(double x) const noexcept {
     base = base[half - 1] <= x ? base + half : base;
     len -= half;
   }
-  const std::size_t k =
-      static_cast<std::size_t>(base - inner) + (len == 1 && base[0] <= x ? 1 : 0);
+  const std::size_t k = static_cast<std::size_t>(base - inner) + (len == 1 && base[0] <= x ? 1 : 0);
   const double v = y_[k] + slope_[k] * (x - x_[k]);
   return std::isfinite(v) ? v : (v > 0 ? y_[n - 1] : y_[0]);
 }

@@ -52,8 +52,8 @@ struct Sums8 {
 // column sums stay in 32-bit lanes for the whole block: a row adds at most
 // 255 * (31 + 30 + 29 + 28) = 30,090 to a lane, so 65,536 rows fit.
 template <bool kMoments, bool kCount, bool kFractions>
-TACTILE_AVX2_INLINE Sums8 pass8_one_group(const Block& b, const FrameRef& f,
-                                          const std::uint8_t* hi, const std::uint8_t* lo) noexcept {
+TACTILE_AVX2_INLINE Sums8 pass8_one_group(const Block& b, const FrameRef& f, const std::uint8_t* hi,
+                                          const std::uint8_t* lo) noexcept {
   const __m256i zero = _mm256_setzero_si256();
   const __m256i ones16 = _mm256_set1_epi16(1);
   const __m256i column =
@@ -81,8 +81,7 @@ TACTILE_AVX2_INLINE Sums8 pass8_one_group(const Block& b, const FrameRef& f,
     acc_l = _mm256_add_epi64(acc_l, _mm256_sad_epu8(lm, zero));
     if constexpr (kMoments) {
       peak = _mm256_max_epu8(peak, s);
-      acc_sx =
-          _mm256_add_epi32(acc_sx, _mm256_madd_epi16(_mm256_maddubs_epi16(s, column), ones16));
+      acc_sx = _mm256_add_epi32(acc_sx, _mm256_madd_epi16(_mm256_maddubs_epi16(s, column), ones16));
       acc_ts = _mm256_add_epi64(acc_ts, acc_s);
       if constexpr (kFractions) {
         acc_lx =
@@ -327,9 +326,9 @@ TACTILE_AVX2_INLINE GaussSums gauss_columns(const Block& b, const FrameRef& f, c
     c2[g] = _mm256_setzero_ps();
   }
   const std::uint8_t* p = f.pixel<std::uint8_t>(b.x0, w.row_lo);
-  const std::uint16_t* rf = d.ref16 + b.offset +
-                            static_cast<std::size_t>(w.row_lo - b.y0) *
-                                static_cast<std::size_t>(b.width);
+  const std::uint16_t* rf =
+      d.ref16 + b.offset +
+      static_cast<std::size_t>(w.row_lo - b.y0) * static_cast<std::size_t>(b.width);
   const auto v0 = static_cast<float>(w.row_lo - w.cy);
   const int rows = w.row_hi - w.row_lo + 1;
   for (int j = 0; j < rows; ++j, p += f.stride, rf += b.width) {

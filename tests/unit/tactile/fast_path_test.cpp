@@ -210,7 +210,8 @@ TEST(FastPath, KernelSetsAgreeOnEveryGaussianWindow) {
   for (int k = 0; k < 4; ++k) {
     renderer.render({}, rng, img);
     const ReferenceResult got = fast.add_reference_frame(img.view());
-    ASSERT_TRUE(got.status == ReferenceStatus::kCollecting || got.status == ReferenceStatus::kComplete)
+    ASSERT_TRUE(got.status == ReferenceStatus::kCollecting ||
+                got.status == ReferenceStatus::kComplete)
         << to_string(got.status) << " element " << got.element_id << " value " << got.value;
     portable.add_reference_frame(img.view());
   }
