@@ -6,9 +6,9 @@
 // processor has AVX2 and FMA). The integer kernels of both give identical results (tests compare
 // them); the floating-point one differs only in rounding. Every function here is noexcept,
 // allocates nothing and reads only the block it is given.
+#include <bit>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 
 #include "tactile/detail/span.hpp"
 
@@ -120,9 +120,8 @@ inline float exp_nonpositive(float x) noexcept {
   p = p * r + 0.5F;
   p = p * r + 1.0F;
   p = p * r + 1.0F;
-  std::uint32_t bits = static_cast<std::uint32_t>(static_cast<int>(n) + 127) << 23;
-  float scale;
-  std::memcpy(&scale, &bits, sizeof scale);
+  const auto scale =
+      std::bit_cast<float>(static_cast<std::uint32_t>(static_cast<int>(n) + 127) << 23);
   return p * scale;
 }
 

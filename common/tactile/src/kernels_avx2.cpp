@@ -46,86 +46,26 @@ struct Sums8 {
   std::int32_t peak = 0;
 };
 
-// pass8 for the commonest block, one group of 32 columns (disks up to 32 pixels across): no
-// inner loop, pointers stepped a row at a time, and the row moments from running sums instead of
-// a multiply per row: with T_r = sum of s over rows 0..r, sum_r r s_r = H S - sum_r T_r. The
-// column sums stay in 32-bit lanes for the whole block: a row adds at most
-// 255 * (31 + 30 + 29 + 28) = 30,090 to a lane, so 65,536 rows fit.
-template <bool kMoments, bool kCount, bool kFractions>
-TACTILE_AVX2_INLINE Sums8 pass8_one_group(const Block& b, const FrameRef& f, const std::uint8_t* hi,
-                                          const std::uint8_t* lo) noexcept {
-  const __m256i zero = _mm256_setzero_si256();
-  const __m256i ones16 = _mm256_set1_epi16(1);
-  const __m256i column =
-      _mm256_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21,
-                       22, 23, 24, 25, 26, 27, 28, 29, 30, 31);
-  __m256i acc_s = zero;  // u64 lanes: S after the row
-  __m256i acc_l = zero;
-  __m256i acc_ts = zero;  // u64 lanes: sum of the running S
-  __m256i acc_tl = zero;
-  __m256i acc_sx = zero;  // u32 lanes
-  __m256i acc_lx = zero;
-  __m256i peak = zero;
-  std::int64_t above = 0;
-  const std::uint8_t* p = f.pixel<std::uint8_t>(b.x0, b.y0);
-  const std::uint8_t* h = hi + b.offset;
-  const std::uint8_t* l = lo + b.offset;
-  for (int r = 0; r < b.height; ++r, p += f.stride, h += 32, l += 32) {
-    const __m256i pv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
-    const __m256i hv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h));
-    const __m256i lv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(l));
-    const __m256i s = _mm256_subs_epu8(pv, hv);
-    const __m256i none = _mm256_cmpeq_epi8(s, zero);
-    const __m256i lm = _mm256_andnot_si256(none, lv);
-    acc_s = _mm256_add_epi64(acc_s, _mm256_sad_epu8(s, zero));
-    acc_l = _mm256_add_epi64(acc_l, _mm256_sad_epu8(lm, zero));
-    if constexpr (kMoments) {
-      peak = _mm256_max_epu8(peak, s);
-      acc_sx = _mm256_add_epi32(acc_sx, _mm256_madd_epi16(_mm256_maddubs_epi16(s, column), ones16));
-      acc_ts = _mm256_add_epi64(acc_ts, acc_s);
-      if constexpr (kFractions) {
-        acc_lx =
-            _mm256_add_epi32(acc_lx, _mm256_madd_epi16(_mm256_maddubs_epi16(lm, column), ones16));
-        acc_tl = _mm256_add_epi64(acc_tl, acc_l);
-      }
-    }
-    if constexpr (kCount) {
-      above += 32 - __builtin_popcount(static_cast<unsigned>(_mm256_movemask_epi8(none)));
-    }
-  }
-  Sums8 out;
-  out.s = sum_u64(acc_s);
-  out.lo = sum_u64(acc_l);
-  if constexpr (kMoments) {
-    const auto rows = static_cast<std::uint64_t>(b.height);
-    out.sx = sum_u64(widen_u32(acc_sx));
-    out.lx = sum_u64(widen_u32(acc_lx));
-    out.sy = rows * out.s - sum_u64(acc_ts);
-    out.ly = rows * out.lo - sum_u64(acc_tl);
-    out.peak = max_u8(peak);
-  }
-  out.above = above;
-  return out;
-}
-
-// One pass over a block whose width is a multiple of 32, with the threshold split (hi, lo).
+// One pass over a block whose width is a multiple of 32, with the threshold split (hi, lo), in
+// groups of 32 columns: kGroups of them, or with kGroups = 0 as many as the block has. One group
+// (every disk up to 32 pixels across) has no inner loop left. The row moments come from running
+// sums, not a multiply per row: with T_r = sum of s over rows 0..r, sum_r r s_r = H S - sum_r T_r.
+// The column sums are exact in 32-bit lanes, which a row grows by at most 2 * 2 * 255 * 31 per
+// group: flushed into 64 bits before they could overflow (never within 65,536 rows of one group).
 // kFractions: also the moments of the fractions lo (exact Q8 moments); without, the moments are
 // those of s alone (MomentKind::kStart).
-template <bool kMoments, bool kCount, bool kFractions = true>
-TACTILE_AVX2_INLINE Sums8 pass8(const Block& b, const FrameRef& f, const std::uint8_t* hi,
-                                const std::uint8_t* lo) noexcept {
-  if (b.width == 32 && b.height <= 65536) {
-    return pass8_one_group<kMoments, kCount, kFractions>(b, f, hi, lo);
-  }
+template <int kGroups, bool kMoments, bool kCount, bool kFractions>
+TACTILE_AVX2_INLINE Sums8 pass8_groups(const Block& b, const FrameRef& f, const std::uint8_t* hi,
+                                       const std::uint8_t* lo) noexcept {
   const __m256i zero = _mm256_setzero_si256();
   const __m256i ones16 = _mm256_set1_epi16(1);
   const __m256i column =
       _mm256_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21,
                        22, 23, 24, 25, 26, 27, 28, 29, 30, 31);
-  __m256i acc_s = zero;   // u64 lanes
+  __m256i acc_s = zero;   // u64 lanes: S after the row
   __m256i acc_l = zero;   // u64 lanes
-  __m256i acc_sy = zero;  // u64 lanes
-  __m256i acc_ly = zero;  // u64 lanes
+  __m256i acc_ts = zero;  // u64 lanes: sum of the running S
+  __m256i acc_tl = zero;
   __m256i acc_sg = zero;  // u64 lanes: group start * group sum of s
   __m256i acc_lg = zero;
   __m256i acc_sx = zero;  // u32 lanes, flushed into sx64
@@ -134,19 +74,15 @@ TACTILE_AVX2_INLINE Sums8 pass8(const Block& b, const FrameRef& f, const std::ui
   __m256i lx64 = zero;
   __m256i peak = zero;
   std::int64_t above = 0;
-  // 32-bit column sums grow by at most 2 * 2 * 255 * 31 per group per lane.
-  const int groups = b.width / 32;
+  const int groups = kGroups > 0 ? kGroups : b.width / 32;
+  const int width = 32 * groups;
   const int flush_rows = std::max(1, static_cast<int>((std::int64_t{1} << 31) / (groups * 31620)));
   int since_flush = 0;
-  for (int r = 0; r < b.height; ++r) {
-    const std::uint8_t* p = f.pixel<std::uint8_t>(b.x0, b.y0 + r);
-    const std::size_t at =
-        b.offset + static_cast<std::size_t>(r) * static_cast<std::size_t>(b.width);
-    const std::uint8_t* h = hi + at;
-    const std::uint8_t* l = lo + at;
-    __m256i row_s = zero;
-    __m256i row_l = zero;
-    for (int g = 0; g < b.width; g += 32) {
+  const std::uint8_t* p = f.pixel<std::uint8_t>(b.x0, b.y0);
+  const std::uint8_t* h = hi + b.offset;
+  const std::uint8_t* l = lo + b.offset;
+  for (int r = 0; r < b.height; ++r, p += f.stride, h += width, l += width) {
+    for (int g = 0; g < width; g += 32) {
       const __m256i pv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + g));
       const __m256i hv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h + g));
       const __m256i lv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(l + g));
@@ -155,8 +91,8 @@ TACTILE_AVX2_INLINE Sums8 pass8(const Block& b, const FrameRef& f, const std::ui
       const __m256i lm = _mm256_andnot_si256(none, lv);
       const __m256i ss = _mm256_sad_epu8(s, zero);
       const __m256i ls = _mm256_sad_epu8(lm, zero);
-      row_s = _mm256_add_epi64(row_s, ss);
-      row_l = _mm256_add_epi64(row_l, ls);
+      acc_s = _mm256_add_epi64(acc_s, ss);
+      acc_l = _mm256_add_epi64(acc_l, ls);
       if constexpr (kMoments) {
         peak = _mm256_max_epu8(peak, s);
         acc_sx =
@@ -175,13 +111,10 @@ TACTILE_AVX2_INLINE Sums8 pass8(const Block& b, const FrameRef& f, const std::ui
         above += 32 - __builtin_popcount(static_cast<unsigned>(_mm256_movemask_epi8(none)));
       }
     }
-    acc_s = _mm256_add_epi64(acc_s, row_s);
-    acc_l = _mm256_add_epi64(acc_l, row_l);
     if constexpr (kMoments) {
-      const __m256i row = _mm256_set1_epi64x(r);
-      acc_sy = _mm256_add_epi64(acc_sy, _mm256_mul_epu32(row_s, row));
-      if constexpr (kFractions) acc_ly = _mm256_add_epi64(acc_ly, _mm256_mul_epu32(row_l, row));
-      if (++since_flush == flush_rows) {
+      acc_ts = _mm256_add_epi64(acc_ts, acc_s);
+      if constexpr (kFractions) acc_tl = _mm256_add_epi64(acc_tl, acc_l);
+      if (kGroups != 1 && ++since_flush == flush_rows) {
         sx64 = _mm256_add_epi64(sx64, widen_u32(acc_sx));
         lx64 = _mm256_add_epi64(lx64, widen_u32(acc_lx));
         acc_sx = zero;
@@ -194,16 +127,26 @@ TACTILE_AVX2_INLINE Sums8 pass8(const Block& b, const FrameRef& f, const std::ui
   out.s = sum_u64(acc_s);
   out.lo = sum_u64(acc_l);
   if constexpr (kMoments) {
+    const auto rows = static_cast<std::uint64_t>(b.height);
     sx64 = _mm256_add_epi64(sx64, widen_u32(acc_sx));
     lx64 = _mm256_add_epi64(lx64, widen_u32(acc_lx));
     out.sx = sum_u64(sx64) + sum_u64(acc_sg);
     out.lx = sum_u64(lx64) + sum_u64(acc_lg);
-    out.sy = sum_u64(acc_sy);
-    out.ly = sum_u64(acc_ly);
+    out.sy = rows * out.s - sum_u64(acc_ts);
+    out.ly = rows * out.lo - sum_u64(acc_tl);
     out.peak = max_u8(peak);
   }
   out.above = above;
   return out;
+}
+
+template <bool kMoments, bool kCount, bool kFractions = true>
+TACTILE_AVX2_INLINE Sums8 pass8(const Block& b, const FrameRef& f, const std::uint8_t* hi,
+                                const std::uint8_t* lo) noexcept {
+  if (b.width == 32 && b.height <= 65536) {
+    return pass8_groups<1, kMoments, kCount, kFractions>(b, f, hi, lo);
+  }
+  return pass8_groups<0, kMoments, kCount, kFractions>(b, f, hi, lo);
 }
 
 TACTILE_AVX2 GSum exact_g_u8(const Block& b, const FrameRef& f, const BlockData& d) noexcept {
@@ -386,7 +329,7 @@ TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockDa
   if (b.width % 8 != 0) return portable_kernels().gauss_u8(b, f, d, w);
   // Groups of 8 from the window's first column (unaligned), moved left where the last group
   // would leave the block; the column weights are computed for exactly those groups, 0 outside
-  // the window, and read back from where they were stored.
+  // the window. The row weights go to w.wy first.
   const int first = std::max(0, w.col_lo - b.x0);
   const int end = std::min(b.width, w.col_hi - b.x0 + 1);
   const int groups = (end - first + 7) / 8;
