@@ -81,10 +81,10 @@ enum class MomentKind : std::uint8_t {
 // d = 256 p - ref of the disk's pixels (negative values included): with u = x - cx, v = y - cy
 // and separable weights W = wx(x) wy(y), wx(x) = exp(-a u^2), wy(y) = exp(-a v^2),
 //   s0 = sum d W, s1x = sum d W u, s2x = sum d W u^2, s1y = sum d W v, s2y = sum d W v^2.
-// The kernel computes the weights itself into the scratch arrays: wx, wxu and wxu2 one value per
-// block column, with kGaussPad writable columns either side (at least block width + 2 kGaussPad
-// floats from wx - kGaussPad); wy one per window row plus kGaussPad. The window keeps
-// -a u^2 >= -72 (reach at most 12 sigmas).
+// The kernels compute the weights themselves, in the scratch arrays as far as they need them:
+// wx, wxu and wxu2 one value per block column, with kGaussPad writable columns either side (at
+// least block width + 2 kGaussPad floats from wx - kGaussPad); wy one per window row plus
+// kGaussPad. The window keeps -a u^2 >= -72 (reach at most 12 sigmas).
 inline constexpr int kGaussPad = 16;
 struct GaussSums {
   double s0 = 0, s1x = 0, s2x = 0, s1y = 0, s2y = 0;

@@ -225,7 +225,7 @@ TACTILE_AVX2_INLINE __m256 exp8_nonpositive(__m256 x) noexcept {
 
 // d = 256 p - ref of 8 pixels of a row from column k as floats; with kMasked 0 outside the disk
 // (the reference of an 8-bit sensor is at most 65280 in Q8; 65535 marks the pixels outside).
-template <bool kMasked = true>
+template <bool kMasked>
 TACTILE_AVX2_INLINE __m256 increments8(const std::uint8_t* p, const std::uint16_t* rf, int k,
                                        __m256i outside) noexcept {
   const __m256i pv = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + k)));
@@ -314,16 +314,6 @@ TACTILE_AVX2_INLINE GaussSums gauss_columns_either(const Block& b, const FrameRe
                        : gauss_columns<kGroups, true>(b, f, d, w, c_lo, first, end);
 }
 
-// One group of 8 pixels of a row times the stored column weights, into three partial sums.
-TACTILE_AVX2_INLINE void gauss_group(const std::uint8_t* p, const std::uint16_t* rf,
-                                     const GaussWindow& w, int k, __m256i outside, __m256& s0,
-                                     __m256& s1, __m256& s2) noexcept {
-  const __m256 df = increments8(p, rf, k, outside);
-  s0 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wx + k), s0);
-  s1 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wxu + k), s1);
-  s2 = _mm256_fmadd_ps(df, _mm256_loadu_ps(w.wxu2 + k), s2);
-}
-
 TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockData& d,
                                 const GaussWindow& w) noexcept {
   if (b.width % 8 != 0) return portable_kernels().gauss_u8(b, f, d, w);
@@ -345,64 +335,32 @@ TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockDa
       _mm256_storeu_ps(w.wy + j, exp8_nonpositive(_mm256_mul_ps(_mm256_mul_ps(minus_a, v), v)));
     }
   }
-  switch (groups) {
-    case 1:
-      return gauss_columns_either<1>(b, f, d, w, c_lo, first, end);
-    case 2:
-      return gauss_columns_either<2>(b, f, d, w, c_lo, first, end);
-    case 3:
-      return gauss_columns_either<3>(b, f, d, w, c_lo, first, end);
-    case 4:
-      return gauss_columns_either<4>(b, f, d, w, c_lo, first, end);
-    default:
-      break;
-  }
-  // Wider windows: the column weights stored once, read back in every row.
-  for (int k = c_lo; k < c_hi; k += 8) {
-    __m256 u;
-    const __m256 wk = column_weights(b, w, k, first, end, u);
-    const __m256 wu = _mm256_mul_ps(wk, u);
-    _mm256_storeu_ps(w.wx + k, wk);
-    _mm256_storeu_ps(w.wxu + k, wu);
-    _mm256_storeu_ps(w.wxu2 + k, _mm256_mul_ps(wu, u));
-  }
-  const __m256i outside = _mm256_set1_epi32(65535);
-  __m256 t0 = _mm256_setzero_ps();
-  __m256 t1x = _mm256_setzero_ps();
-  __m256 t2x = _mm256_setzero_ps();
-  __m256 t1y = _mm256_setzero_ps();
-  __m256 t2y = _mm256_setzero_ps();
-  for (int y = w.row_lo; y <= w.row_hi; ++y) {
-    const int r = y - b.y0;
-    const std::uint8_t* p = f.pixel<std::uint8_t>(b.x0, y);
-    const std::uint16_t* rf =
-        d.ref16 + b.offset + static_cast<std::size_t>(r) * static_cast<std::size_t>(b.width);
-    // Two sets of partial sums, for even and odd groups: shorter dependency chains.
-    __m256 a0 = _mm256_setzero_ps();
-    __m256 a1 = _mm256_setzero_ps();
-    __m256 a2 = _mm256_setzero_ps();
-    __m256 b0 = _mm256_setzero_ps();
-    __m256 b1 = _mm256_setzero_ps();
-    __m256 b2 = _mm256_setzero_ps();
-    int k = c_lo;
-    for (; k + 8 < c_hi; k += 16) {
-      gauss_group(p, rf, w, k, outside, a0, a1, a2);
-      gauss_group(p, rf, w, k + 8, outside, b0, b1, b2);
+  // The window in strips of up to four groups (32 columns: one strip for every window on a disk
+  // up to 32 pixels across), each summed column by column, the strips' sums added.
+  GaussSums out;
+  for (int c = c_lo; c < c_hi; c += 32) {
+    GaussSums part;
+    switch (std::min(4, (c_hi - c) / 8)) {
+      case 1:
+        part = gauss_columns_either<1>(b, f, d, w, c, first, end);
+        break;
+      case 2:
+        part = gauss_columns_either<2>(b, f, d, w, c, first, end);
+        break;
+      case 3:
+        part = gauss_columns_either<3>(b, f, d, w, c, first, end);
+        break;
+      default:
+        part = gauss_columns_either<4>(b, f, d, w, c, first, end);
+        break;
     }
-    if (k < c_hi) gauss_group(p, rf, w, k, outside, a0, a1, a2);
-    a0 = _mm256_add_ps(a0, b0);
-    a1 = _mm256_add_ps(a1, b1);
-    a2 = _mm256_add_ps(a2, b2);
-    const float wy = w.wy[y - w.row_lo];
-    const auto v = static_cast<float>(y - w.cy);
-    const __m256 wyv = _mm256_set1_ps(wy);
-    t0 = _mm256_fmadd_ps(a0, wyv, t0);
-    t1x = _mm256_fmadd_ps(a1, wyv, t1x);
-    t2x = _mm256_fmadd_ps(a2, wyv, t2x);
-    t1y = _mm256_fmadd_ps(a0, _mm256_set1_ps(wy * v), t1y);
-    t2y = _mm256_fmadd_ps(a0, _mm256_set1_ps(wy * v * v), t2y);
+    out.s0 += part.s0;
+    out.s1x += part.s1x;
+    out.s2x += part.s2x;
+    out.s1y += part.s1y;
+    out.s2y += part.s2y;
   }
-  return {hsum(t0), hsum(t1x), hsum(t2x), hsum(t1y), hsum(t2y)};
+  return out;
 }
 
 }  // namespace
