@@ -4,6 +4,7 @@
 #include <fmt/core.h>
 #include <netinet/in.h>
 #include <poll.h>
+#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -24,26 +25,50 @@
 
 namespace tactile::camera {
 namespace {
-// The frame period (ms) of the fake camera whose thread this is; 0 on every other thread.
-thread_local int t_fake_camera_period_ms = 0;
+// The frame period (us) of the fake camera whose thread this is; 0 on every other thread.
+thread_local std::int64_t t_fake_camera_period_us = 0;
+// The last microseconds before a frame, still spun through: a thread woken from a sleep runs tens
+// of microseconds late on a busy machine, and the frame would leave that much after its time.
+constexpr std::int64_t kFakeCameraSpinUs = 100;
 }  // namespace
 }  // namespace tactile::camera
 
-// Aravis 0.8.26's ArvGvFakeCamera thread computes its poll timeout as
-// (guint64 next_timestamp_us - g_get_real_time ()) / 1000, clamped to 0..100 ms: when the frame
-// time passes between its loop test and that line (it spins on poll(0) through the last
-// millisecond before each frame) the unsigned difference wraps and the camera waits 100 ms
-// before the frame; about one frame in a hundred on a busy machine (upstream pull request 1089).
+// Aravis 0.8.26's ArvGvFakeCamera thread waits for its next frame, the next multiple of the
+// frame period in g_get_real_time () microseconds, by polling its control sockets with the
+// timeout (guint64 next_timestamp_us - g_get_real_time ()) / 1000, clamped to 0..100 ms, until
+// that time. Two consequences, both mended here:
+// - Through the last millisecond before each frame the timeout is 0: the thread spins on
+//   poll(2), half a millisecond per frame on average (a sixth of a core for the rig's two
+//   cameras at 200 fps, taken from the programs it serves).
+// - When the frame time passes between its loop test and that line, the unsigned difference
+//   wraps and the camera waits 100 ms before the frame; about one frame in a hundred on a busy
+//   machine (upstream pull request 1089).
 // This program's g_poll is found before GLib's (the dynamic linker looks in the executable
-// first) and is GLib's own on Linux, poll(2), with one change on a fake camera's thread: while
-// it streams, a wait longer than its frame period can only be that wrap, and is not waited.
+// first) and is GLib's own on Linux, poll(2), with two changes on a fake camera's thread while
+// it streams: a wait longer than its frame period can only be that wrap, and is not waited; and
+// a wait of 0 in the last millisecond before a frame boundary sleeps until kFakeCameraSpinUs
+// before it (ppoll(2), microseconds, still woken by a control packet; the thread's timer slack
+// set to 1 ns), and spins only through those. A poll of 0 just after a boundary (the frame is
+// due) returns at once, as before. Periods under 2 ms keep the spin: there the two cases cannot
+// be told apart by the time alone.
 static_assert(sizeof(GPollFD) == sizeof(pollfd) && offsetof(GPollFD, revents) ==
                                                        offsetof(pollfd, revents),
               "g_poll passes GPollFD to poll(2) as GLib does on Linux");
 extern "C" gint g_poll(GPollFD* fds, guint nfds, gint timeout) {
-  const int period_ms = tactile::camera::t_fake_camera_period_ms;
-  if (period_ms > 0 && timeout > period_ms) timeout = 0;
-  return ::poll(reinterpret_cast<pollfd*>(fds), nfds, timeout);
+  const std::int64_t period_us = tactile::camera::t_fake_camera_period_us;
+  auto* pfds = reinterpret_cast<pollfd*>(fds);
+  if (period_us > 0) {
+    if (timeout > period_us / 1000) timeout = 0;
+    if (timeout == 0 && period_us >= 2000) {
+      const std::int64_t left_us = period_us - g_get_real_time() % period_us;
+      if (left_us < 1000 && left_us > tactile::camera::kFakeCameraSpinUs) {
+        const timespec wait{
+            0, static_cast<long>((left_us - tactile::camera::kFakeCameraSpinUs) * 1000)};
+        return ::ppoll(pfds, nfds, &wait, nullptr);
+      }
+    }
+  }
+  return ::poll(pfds, nfds, timeout);
 }
 
 namespace tactile::camera {
@@ -138,7 +163,8 @@ struct FakeGvCamera::Impl {
         arv_fake_camera_read_register(arv_gv_fake_camera_get_fake_camera(self->camera.get()),
                                       ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
                                       &period_us)) {
-      t_fake_camera_period_ms = static_cast<int>(period_us / 1000);
+      if (t_fake_camera_period_us == 0) prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
+      t_fake_camera_period_us = period_us;
     }
     SentFrame sent;
     sent.block_id = arv_buffer_get_frame_id(buffer);
