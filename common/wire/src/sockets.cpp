@@ -60,12 +60,18 @@ void copy_to(const zmq::message_t& m, std::vector<std::uint8_t>& out) {
 
 }  // namespace
 
-unsigned poll_readable(std::span<zmq::socket_ref> sockets, std::chrono::milliseconds timeout) {
-  std::array<zmq::pollitem_t, 8> items{};
-  const std::size_t n = std::min(sockets.size(), items.size());
+unsigned poll_readable(std::span<zmq::socket_ref> sockets, std::chrono::milliseconds timeout,
+                       int wake_fd) {
+  std::array<zmq::pollitem_t, 9> items{};
+  std::size_t n = std::min(sockets.size(), items.size() - 1);
   for (std::size_t i = 0; i < n; ++i) {
     items[i].socket = sockets[i].handle();
     items[i].events = ZMQ_POLLIN;
+  }
+  if (wake_fd >= 0) {
+    items[n].fd = wake_fd;
+    items[n].events = ZMQ_POLLIN;
+    ++n;
   }
   try {
     if (zmq::poll(items.data(), n, timeout) <= 0) return 0;

@@ -1,9 +1,13 @@
 #include "tactile/rig/realtime.hpp"
 
 #include <fmt/format.h>
+#include <sys/timerfd.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <deque>
 #include <memory>
 #include <thread>
@@ -77,6 +81,35 @@ void fill_truth_message(const GroundTruth& gt, std::int64_t now_ns, v1::GroundTr
   out.set_cap_on_bottle(gt.cap_on_bottle);
   out.set_twist_cycle(gt.twist_cycle);
 }
+
+// A timerfd on CLOCK_REALTIME (util::realtime_ns's clock), armed for one absolute instant: a
+// file descriptor that becomes readable then, for poll. Without one (no timerfd) fd() is -1
+// and the millisecond timeout alone bounds the wait.
+class WakeTimer {
+ public:
+  WakeTimer() : fd_(::timerfd_create(CLOCK_REALTIME, TFD_NONBLOCK | TFD_CLOEXEC)) {
+    if (fd_ < 0)
+      util::log_warn("no timerfd ({}): frames start up to a millisecond late",
+                     std::strerror(errno));
+  }
+  ~WakeTimer() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  WakeTimer(const WakeTimer&) = delete;
+  WakeTimer& operator=(const WakeTimer&) = delete;
+  int fd() const { return fd_; }
+  // Re-arming clears an expiry not yet read, so the descriptor is readable only from `at_ns` on.
+  void arm_at(std::int64_t at_ns) const {
+    if (fd_ < 0) return;
+    itimerspec when{};
+    when.it_value.tv_sec = static_cast<time_t>(at_ns / 1'000'000'000);
+    when.it_value.tv_nsec = static_cast<long>(at_ns % 1'000'000'000);
+    ::timerfd_settime(fd_, TFD_TIMER_ABSTIME, &when, nullptr);
+  }
+
+ private:
+  int fd_;
+};
 
 // A truth kept until the measured frames of its instant arrive (a few frame periods).
 struct KeptTruth {
@@ -313,6 +346,10 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
 
   std::array<zmq::socket_ref, 3> sockets{arm.socket(), frames.socket(),
                                          events ? events->socket() : frames.socket()};
+  // Wakes the serving loop at the instant to render: ZeroMQ's poll counts whole milliseconds, and
+  // a timeout rounded up started the frame up to a millisecond late (images then published after
+  // their send instant), one rounded down would spin through the last millisecond.
+  const WakeTimer render_timer;
   const auto max_ns = static_cast<std::int64_t>(sc.max_time_s * 1e9);
   while (!util::stop_requested()) {
     const std::int64_t send_ns = static_cast<std::int64_t>(frame) * period_ns;
@@ -321,9 +358,11 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
     for (;;) {
       std::int64_t now = util::realtime_ns();
       const std::int64_t wait_ns = render_ns - now;
-      if (wait_ns > 0)
-        wire::poll_readable(sockets,
-                            milliseconds(std::min<std::int64_t>(wait_ns / 1000000 + 1, 5)));
+      if (wait_ns > 0) {
+        render_timer.arm_at(render_ns);
+        wire::poll_readable(sockets, milliseconds(std::min<std::int64_t>(wait_ns / 1000000 + 1, 5)),
+                            render_timer.fd());
+      }
       now = util::realtime_ns();
       while (arm.receive(from, payload, milliseconds(0)))
         on_arm_message(util::realtime_ns());
@@ -343,7 +382,9 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
     }
 
     // The world at the instant the camera sends the frame.
+    const std::int64_t started_ns = now;
     advance_to(send_ns);
+    const std::int64_t stepped_ns = util::realtime_ns();
     const double thr = cfg.dr_mm * (control::is_twist_phase(phase) ? cfg.twist_dr_factor : 1.0);
     const GroundTruth& gt = recorder.take(world, frame, thr);
     KeptTruth kt;
@@ -365,6 +406,16 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
       }
     }
     ++c.frames_rendered;
+    if (const std::int64_t published_ns = util::realtime_ns(); published_ns > send_ns) {
+      ++c.late_publishes;
+      util::log_debug(
+          "frame {} published {:.2f} ms after its send instant: started {:.2f} ms before it, "
+          "world {:.2f} ms, images {:.2f} ms",
+          frame, static_cast<double>(published_ns - send_ns) * 1e-6,
+          static_cast<double>(send_ns - started_ns) * 1e-6,
+          static_cast<double>(stepped_ns - started_ns) * 1e-6,
+          static_cast<double>(published_ns - stepped_ns) * 1e-6);
+    }
     scorer.add_truth(kt.truth, twist_cycle);
     if (truth_pub) {
       fill_truth_message(kt.truth, util::realtime_ns(), *truth_env.mutable_ground_truth());
@@ -412,11 +463,10 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
                                      *std::max_element(latencies_ms.begin(), latencies_ms.end())};
   }
   util::log_info(
-      "frames rendered {} (late {}), scored {} (unmatched {}, incomplete {}), commands {} (refused "
-      "{}), "
-      "deadman trips {}, events {}",
-      c.frames_rendered, c.late_renders, c.frames_scored, c.frames_unmatched, c.frames_incomplete,
-      c.commands, c.invalid_commands, c.deadman_trips, c.events);
+      "frames rendered {} (late {}, published late {}), scored {} (unmatched {}, incomplete {}), "
+      "commands {} (refused {}), deadman trips {}, events {}",
+      c.frames_rendered, c.late_renders, c.late_publishes, c.frames_scored, c.frames_unmatched,
+      c.frames_incomplete, c.commands, c.invalid_commands, c.deadman_trips, c.events);
   return result;
 }
 
