@@ -168,6 +168,13 @@ class Child {
     }
     return true;
   }
+  // Exit code once the child has ended by itself, or was stopped `timeout` after the call.
+  int wait(milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (running() && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(milliseconds(10));
+    return stop(milliseconds(2000));
+  }
   // Exit code (128 + signal when killed); SIGINT first, SIGKILL after `timeout`.
   int stop(milliseconds timeout) {
     if (running()) ::kill(pid_, SIGINT);
@@ -383,7 +390,8 @@ fs::path write_scenario(const Settings& s, double fps, double max_time_s, const 
 
 void run_checked(const std::string& name, std::vector<std::string> argv, const fs::path& log) {
   Child c(name, std::move(argv), log);
-  if (c.stop(milliseconds(30000)) != 0 && c.exit_code() != 0)
+  // Waited for, not stopped at once: a SIGINT before the program set its handler killed it.
+  if (c.wait(milliseconds(30000)) != 0)
     throw std::runtime_error(
         fmt::format("{} failed (status {}):{}", name, c.exit_code(), tail_of(log)));
 }

@@ -129,7 +129,8 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
   World world(sc.world);
   const double dt = sc.step_s();
   const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / sc.camera.fps));
-  const auto lead_ns = static_cast<std::int64_t>(opt.render_lead_s * 1e9);
+  const auto lead_ns =
+      std::min(static_cast<std::int64_t>(opt.render_lead_s * 1e9), period_ns * 3 / 4);
 
   // Sensors: calibrations (written for sensor_node and hand_node), renderers, cameras.
   const auto normals = world.element_normals();

@@ -31,7 +31,9 @@ struct RealtimeOptions {
   // The arm holds when it heard nothing from hand_node for this long.
   double deadman_s = 0.04;
   // Each frame is rendered this long before the camera sends it (the fake camera sends at
-  // whole multiples of its period on the wall clock, so the instant is known).
+  // whole multiples of its period on the wall clock, so the instant is known), but at most
+  // three quarters of a period: an image published before the previous send instant would go
+  // out a period early.
   double render_lead_s = 0.003;
   // Give up when no hand_node has spoken this long after the start.
   double wait_for_hand_s = 60.0;
