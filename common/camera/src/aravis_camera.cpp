@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <stdexcept>
@@ -32,6 +33,36 @@ std::int64_t read_rmem_max() {
   std::int64_t value = -1;
   file >> value;
   return file ? value : -1;
+}
+
+// Sizes the receive buffer of this process's UDP socket bound to `port` (Aravis's stream socket,
+// which its API does not expose) now, rather than when the stream's first frame starts, which is
+// how Aravis 0.8.26 applies its FIXED size: the first frame's packets then met the default
+// buffer (about 200 KiB), and a 640x480 frame overflowed it. Start-up only: one getsockname per
+// open descriptor. Returns false when no such socket was found or the size was refused.
+bool size_stream_socket(std::uint16_t port, std::size_t bytes) {
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd", ec)) {
+    int fd = -1;
+    try {
+      fd = std::stoi(entry.path().filename().string());
+    } catch (const std::exception&) {
+      continue;
+    }
+    sockaddr_in local{};
+    socklen_t length = sizeof(local);
+    if (::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &length) != 0 ||
+        local.sin_family != AF_INET || ntohs(local.sin_port) != port) {
+      continue;
+    }
+    int type = 0;
+    socklen_t type_length = sizeof(type);
+    if (::getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &type_length) != 0 || type != SOCK_DGRAM)
+      continue;
+    const int size = static_cast<int>(std::min<std::size_t>(bytes, INT32_MAX));
+    return ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &size, sizeof(size)) == 0;
+  }
+  return false;
 }
 
 guint to_microseconds(Duration d) {
@@ -324,8 +355,9 @@ struct AravisCamera::Impl {
     if (!stream) throw std::runtime_error(fmt::format("{}: cannot create the stream", where()));
 
     if (is_gv) {
-      // The default socket buffer drops packets at 640x480 and 100 fps (notes); it is applied
-      // when the first frame starts, so that frame may come incomplete.
+      // The default socket buffer drops packets at 640x480 and 100 fps (notes). Aravis applies
+      // the FIXED size when the first frame starts, so the socket is sized here as well, before
+      // any packet arrives (without that the first frame often came incomplete).
       g_object_set(stream.get(), "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED,
                    "socket-buffer-size", static_cast<gint>(options.socket_buffer_bytes),
                    "packet-resend",
@@ -333,6 +365,13 @@ struct AravisCamera::Impl {
                                          : ARV_GV_STREAM_PACKET_RESEND_NEVER,
                    "packet-timeout", to_microseconds(options.packet_timeout), "frame-retention",
                    to_microseconds(options.frame_retention), nullptr);
+      if (!size_stream_socket(arv_gv_stream_get_port(ARV_GV_STREAM(stream.get())),
+                              options.socket_buffer_bytes)) {
+        util::log_warn(
+            "{}: could not size the stream socket before the first frame; it may "
+            "come incomplete",
+            where());
+      }
       const std::int64_t rmem_max = read_rmem_max();
       if (rmem_max >= 0 && static_cast<std::size_t>(rmem_max) < options.socket_buffer_bytes) {
         util::log_warn(

@@ -198,7 +198,8 @@ ReceiveReport receive_and_check(AravisCamera& camera, int count, std::uint32_t s
 }
 
 void expect_clean_stream(AravisCamera& camera, const ReceiveReport& report, int count) {
-  // The socket buffer is applied when the first frame starts: only that one may be short.
+  // One frame of slack for a busy machine (the first used to come short, before the stream
+  // socket was sized at open: GigEStart checks that on its own).
   EXPECT_GE(report.complete, count - 1) << counters_text(camera.counters());
   EXPECT_EQ(report.gaps, 0) << counters_text(camera.counters());
   EXPECT_EQ(report.late, 0) << counters_text(camera.counters());
@@ -239,6 +240,24 @@ TEST_P(GigE, FramesArriveWholeWithThePublishedPixelsAndTimestamps) {
 INSTANTIATE_TEST_SUITE_P(Mono8AndMono16, GigE,
                          ::testing::Values(PixelFormat::kMono8, PixelFormat::kMono16),
                          [](const auto& p) { return std::string(to_string(p.param)); });
+
+// A stream's first frame used to meet the kernel's default socket buffer (Aravis applies its
+// own size only when that frame starts): at 640x480 Mono16 it overflowed and came incomplete.
+TEST(GigEStart, TheFirstFrameOfEveryNewStreamComesWhole) {
+  FakeGvCamera fake(fake_options("127.0.0.2", "UT05", 640, 480, PixelFormat::kMono16, 50.0));
+  ASSERT_TRUE(fake.is_running());
+  const TimestampCode code;
+  Renderer renderer(fake, 23, code, 8ms);
+  for (int stream = 0; stream < 5; ++stream) {
+    AravisCamera camera(receiver_options("127.0.0.2", 640, 480, PixelFormat::kMono16, 50.0));
+    camera.start();
+    const Frame f = camera.wait_frame(2s);
+    ASSERT_TRUE(f.received) << "stream " << stream << ": " << counters_text(camera.counters());
+    EXPECT_EQ(f.status, FrameStatus::kComplete)
+        << "stream " << stream << ": " << counters_text(camera.counters());
+    camera.stop();
+  }
+}
 
 TEST(GigEFaults, LostPacketsGiveIncompleteFramesNeverWrongPixels) {
   FakeGvCamera fake(fake_options("127.0.0.2", "UT02", 320, 240, PixelFormat::kMono8, 100.0));
