@@ -8,9 +8,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 
@@ -43,12 +45,9 @@ std::int64_t read_rmem_max() {
 bool size_stream_socket(std::uint16_t port, std::size_t bytes) {
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd", ec)) {
+    const std::string name = entry.path().filename().string();
     int fd = -1;
-    try {
-      fd = std::stoi(entry.path().filename().string());
-    } catch (const std::exception&) {
-      continue;
-    }
+    if (std::from_chars(name.data(), name.data() + name.size(), fd).ec != std::errc{}) continue;
     sockaddr_in local{};
     socklen_t length = sizeof(local);
     if (::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &length) != 0 ||
@@ -59,7 +58,8 @@ bool size_stream_socket(std::uint16_t port, std::size_t bytes) {
     socklen_t type_length = sizeof(type);
     if (::getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &type_length) != 0 || type != SOCK_DGRAM)
       continue;
-    const int size = static_cast<int>(std::min<std::size_t>(bytes, INT32_MAX));
+    const int size = static_cast<int>(
+        std::min<std::size_t>(bytes, static_cast<std::size_t>(std::numeric_limits<int>::max())));
     return ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &size, sizeof(size)) == 0;
   }
   return false;

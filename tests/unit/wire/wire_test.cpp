@@ -1,6 +1,9 @@
 // Wire conversions (pure) and the ZeroMQ endpoints over real sockets.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <thread>
@@ -372,6 +375,24 @@ TEST(Sockets, PublishSubscribeOverTcp) {
       EXPECT_EQ(msg.topic, "frame/left");
     }
   }
+}
+
+// The rig wakes for its render instant on a timerfd beside its sockets: poll_readable reports
+// the extra descriptor in the bit after the sockets' and does not report it when it is silent.
+TEST(Sockets, PollReadableAlsoWakesOnAFileDescriptor) {
+  zmq::context_t ctx;
+  Subscriber sub(ctx, {"inproc://poll-fd"}, {""});
+  std::array<zmq::socket_ref, 1> sockets{sub.socket()};
+  int pipe_fds[2];
+  ASSERT_EQ(::pipe(pipe_fds), 0);
+  EXPECT_EQ(poll_readable(sockets, 20ms, pipe_fds[0]), 0U);
+  ASSERT_EQ(::write(pipe_fds[1], "x", 1), 1);
+  const auto before = std::chrono::steady_clock::now();
+  EXPECT_EQ(poll_readable(sockets, 5000ms, pipe_fds[0]), 1U << 1);
+  EXPECT_LT(std::chrono::steady_clock::now() - before, 2500ms) << "waited for the timeout";
+  EXPECT_EQ(poll_readable(sockets, 20ms), 0U) << "without the descriptor nothing is readable";
+  ::close(pipe_fds[0]);
+  ::close(pipe_fds[1]);
 }
 
 TEST(Sockets, SubscriberCountsMessagesOfTheWrongShape) {

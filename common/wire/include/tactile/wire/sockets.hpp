@@ -15,10 +15,10 @@
 
 namespace tactile::wire {
 
-// Waits up to `timeout` until at least one of the sockets has a message; returns a bit mask
-// (bit i: sockets[i] is readable), 0 on timeout or when a signal interrupted the wait. With
-// `wake_fd` (a file descriptor, such as a timerfd for a wake-up finer than the millisecond
-// timeout), the wait also ends when it is readable: bit sockets.size() of the mask.
+// Waits up to `timeout` until at least one of the sockets (the first 8) has a message; returns a
+// bit mask (bit i: sockets[i] is readable), 0 on timeout or when a signal interrupted the wait.
+// With `wake_fd` (a file descriptor, such as a timerfd for a wake-up finer than the millisecond
+// timeout), the wait also ends when it is readable: the bit after the sockets' bits.
 unsigned poll_readable(std::span<zmq::socket_ref> sockets, std::chrono::milliseconds timeout,
                        int wake_fd = -1);
 
