@@ -33,14 +33,65 @@ std::uint64_t mix(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
-struct ElementScore {
-  bool was_sliding = false;
-  bool pending = false;
-  std::uint64_t onset = 0;
-  std::uint64_t last_true = 0;
-};
+double ratio(std::uint64_t part, std::uint64_t rest) {
+  return part + rest > 0 ? static_cast<double>(part) / static_cast<double>(part + rest) : 1.0;
+}
 
 }  // namespace
+
+void SlipScorer::add(std::size_t i, std::size_t k, std::uint64_t frame, bool predicted,
+                     const ElementTruth& et, double thr) {
+  m_.true_positives += predicted && et.sliding ? 1 : 0;
+  m_.false_positives += predicted && !et.sliding ? 1 : 0;
+  m_.false_negatives += !predicted && et.sliding ? 1 : 0;
+  Element& es = elements_[i][k];
+  const bool ideal =
+      et.visible && es.was_visible && std::hypot(et.ux_mm - es.ux_mm, et.uy_mm - es.uy_mm) > thr;
+  ideal_tp_ += ideal && et.sliding ? 1 : 0;
+  ideal_fp_ += ideal && !et.sliding ? 1 : 0;
+  ideal_fn_ += !ideal && et.sliding ? 1 : 0;
+  es.was_visible = et.visible;
+  es.ux_mm = et.ux_mm;
+  es.uy_mm = et.uy_mm;
+  if (et.sliding && !es.was_sliding) {
+    ++m_.onsets;
+    if (es.pending) {  // a new episode before the last was covered
+      ++m_.missed_onsets;
+      latencies_.push_back(kMissedLatencyFrames);
+    }
+    es.pending = true;
+    es.onset = frame;
+  }
+  if (et.sliding) es.last_true = frame;
+  if (es.pending && predicted) {
+    latencies_.push_back(static_cast<double>(frame - es.onset));
+    es.pending = false;
+  } else if (es.pending && !et.sliding && frame > es.last_true + 2) {
+    ++m_.missed_onsets;
+    latencies_.push_back(kMissedLatencyFrames);
+    es.pending = false;
+  }
+  es.was_sliding = et.sliding;
+}
+
+void SlipScorer::finish(SlipMetrics& out) {
+  for (auto& tip : elements_) {
+    for (Element& es : tip) {
+      if (es.pending) {
+        ++m_.missed_onsets;
+        latencies_.push_back(kMissedLatencyFrames);
+        es.pending = false;
+      }
+    }
+  }
+  m_.precision = ratio(m_.true_positives, m_.false_positives);
+  m_.recall = ratio(m_.true_positives, m_.false_negatives);
+  m_.ideal_precision = ratio(ideal_tp_, ideal_fp_);
+  m_.ideal_recall = ratio(ideal_tp_, ideal_fn_);
+  m_.latency_frames_p50 = percentile(latencies_, 0.50);
+  m_.latency_frames_p99 = percentile(latencies_, 0.99);
+  out = m_;
+}
 
 LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   LockstepResult result;
@@ -94,8 +145,7 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   bool done_seen = false;
   double done_at = 0;
   double dropped_at = -1;
-  std::array<std::array<ElementScore, kElementsPerFingertip>, kFingertips> score{};
-  std::vector<double> latencies;
+  SlipScorer slip;
   double sq_normal = 0;
   double sq_shear = 0;
   std::uint64_t n_normal = 0;
@@ -164,42 +214,14 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
         const ElementTruth& et = gt.fingertips[i].elements[k];
         const double d = std::hypot(r.dx_mm, r.dy_mm);
         const bool predicted = r.contact && r.has_displacement && d > thr;
-        if (predicted && et.sliding) {
-          ++rep.slip.true_positives;
-          ++sample.tp[i];
-        }
-        if (predicted && !et.sliding) {
-          ++rep.slip.false_positives;
-          ++sample.fp[i];
-        }
-        if (!predicted && et.sliding) {
-          ++rep.slip.false_negatives;
-          ++sample.fn[i];
-        }
+        slip.add(i, k, frame, predicted, et, thr);
+        if (predicted && et.sliding) ++sample.tp[i];
+        if (predicted && !et.sliding) ++sample.fp[i];
+        if (!predicted && et.sliding) ++sample.fn[i];
         if (opt.record_series && predicted != et.sliding) {
           result.series.mismatches.push_back(
               {t, static_cast<int>(i), static_cast<std::uint32_t>(k), predicted, d, r.fz, et});
         }
-        ElementScore& es = score[i][k];
-        if (et.sliding && !es.was_sliding) {
-          ++rep.slip.onsets;
-          if (es.pending) {  // a new episode before the last was covered
-            ++rep.slip.missed_onsets;
-            latencies.push_back(kMissedLatencyFrames);
-          }
-          es.pending = true;
-          es.onset = frame;
-        }
-        if (et.sliding) es.last_true = frame;
-        if (es.pending && predicted) {
-          latencies.push_back(static_cast<double>(frame - es.onset));
-          es.pending = false;
-        } else if (es.pending && !et.sliding && frame > es.last_true + 2) {
-          ++rep.slip.missed_onsets;
-          latencies.push_back(kMissedLatencyFrames);
-          es.pending = false;
-        }
-        es.was_sliding = et.sliding;
 
         if (et.visible || r.contact) {
           const double en = (r.contact ? r.fz : 0.0) - et.fz_n;
@@ -341,25 +363,10 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
     }
   }
 
-  // Onsets still waiting at the end were never covered.
-  for (auto& tip : score) {
-    for (ElementScore& es : tip) {
-      if (es.pending) {
-        ++rep.slip.missed_onsets;
-        latencies.push_back(kMissedLatencyFrames);
-      }
-    }
-  }
+  slip.finish(rep.slip);
   rep.dropped = world.cap().dropped;
   rep.frames = frame;
   rep.sim_time_s = static_cast<double>(frame) / sc.camera.fps;
-  const auto tp = static_cast<double>(rep.slip.true_positives);
-  const auto fp = static_cast<double>(rep.slip.false_positives);
-  const auto fn = static_cast<double>(rep.slip.false_negatives);
-  rep.slip.precision = tp + fp > 0 ? tp / (tp + fp) : 1.0;
-  rep.slip.recall = tp + fn > 0 ? tp / (tp + fn) : 1.0;
-  rep.slip.latency_frames_p50 = percentile(latencies, 0.50);
-  rep.slip.latency_frames_p99 = percentile(latencies, 0.99);
   rep.force_rmse_normal_N = n_normal > 0 ? std::sqrt(sq_normal / static_cast<double>(n_normal)) : 0;
   rep.force_rmse_shear_N = n_shear > 0 ? std::sqrt(sq_shear / static_cast<double>(n_shear)) : 0;
   return result;
@@ -477,7 +484,15 @@ std::string report_json(const Report& r) {
   o += ", ";
   key("missed_onsets");
   o += std::to_string(r.slip.missed_onsets);
-  o += "},\n ";
+  o += ",\n          ";
+  key("ideal_sensor");
+  o += "{";
+  key("precision");
+  json_number(o, r.slip.ideal_precision);
+  o += ", ";
+  key("recall");
+  json_number(o, r.slip.ideal_recall);
+  o += "}},\n ";
   key("force_rmse_N");
   o += "{";
   key("normal");

@@ -5,17 +5,6 @@
 #include <string>
 
 namespace tactile::rig {
-namespace {
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
-  return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
-}
-
-}  // namespace
-
 RunScorer::RunScorer(LockstepResult& run, const control::Config& cfg, bool record_series)
     : run_(run), cfg_(cfg), record_(record_series) {
   const Calibration& cal = run.calibrations[0];
@@ -63,9 +52,7 @@ void RunScorer::add_measurement(std::size_t i, std::uint64_t frame, double t,
     const ElementTruth& et = truth.elements[k];
     const double d = std::hypot(r.dx_mm, r.dy_mm);
     const bool predicted = r.contact && r.has_displacement && d > thr;
-    if (predicted && et.sliding) ++rep.slip.true_positives;
-    if (predicted && !et.sliding) ++rep.slip.false_positives;
-    if (!predicted && et.sliding) ++rep.slip.false_negatives;
+    slip_.add(i, k, frame, predicted, et, thr);
     if (sample != nullptr) {
       if (predicted && et.sliding) ++sample->tp[i];
       if (predicted && !et.sliding) ++sample->fp[i];
@@ -75,26 +62,6 @@ void RunScorer::add_measurement(std::size_t i, std::uint64_t frame, double t,
       run_.series.mismatches.push_back(
           {t, static_cast<int>(i), static_cast<std::uint32_t>(k), predicted, d, r.fz, et});
     }
-    ElementScore& es = score_[i][k];
-    if (et.sliding && !es.was_sliding) {
-      ++rep.slip.onsets;
-      if (es.pending) {
-        ++rep.slip.missed_onsets;
-        latencies_.push_back(kMissedLatencyFrames);
-      }
-      es.pending = true;
-      es.onset = frame;
-    }
-    if (et.sliding) es.last_true = frame;
-    if (es.pending && predicted) {
-      latencies_.push_back(static_cast<double>(frame - es.onset));
-      es.pending = false;
-    } else if (es.pending && !et.sliding && frame > es.last_true + 2) {
-      ++rep.slip.missed_onsets;
-      latencies_.push_back(kMissedLatencyFrames);
-      es.pending = false;
-    }
-    es.was_sliding = et.sliding;
     if (et.visible || r.contact) {
       const double en = (r.contact ? r.fz : 0.0) - et.fz_n;
       const double ex = (r.contact ? r.fx : 0.0) - et.fx_n;
@@ -172,25 +139,10 @@ void RunScorer::add_event(control::EventKind kind, control::Phase phase, std::ui
 
 void RunScorer::finish(const World& world, double sim_time_s, std::uint64_t frames) {
   Report& rep = run_.report;
-  for (auto& tip : score_) {
-    for (ElementScore& es : tip) {
-      if (es.pending) {
-        ++rep.slip.missed_onsets;
-        latencies_.push_back(kMissedLatencyFrames);
-        es.pending = false;
-      }
-    }
-  }
+  slip_.finish(rep.slip);
   rep.dropped = world.cap().dropped;
   rep.frames = frames;
   rep.sim_time_s = sim_time_s;
-  const auto tp = static_cast<double>(rep.slip.true_positives);
-  const auto fp = static_cast<double>(rep.slip.false_positives);
-  const auto fn = static_cast<double>(rep.slip.false_negatives);
-  rep.slip.precision = tp + fp > 0 ? tp / (tp + fp) : 1.0;
-  rep.slip.recall = tp + fn > 0 ? tp / (tp + fn) : 1.0;
-  rep.slip.latency_frames_p50 = percentile(latencies_, 0.50);
-  rep.slip.latency_frames_p99 = percentile(latencies_, 0.99);
   rep.force_rmse_normal_N =
       n_normal_ > 0 ? std::sqrt(sq_normal_ / static_cast<double>(n_normal_)) : 0;
   rep.force_rmse_shear_N = n_shear_ > 0 ? std::sqrt(sq_shear_ / static_cast<double>(n_shear_)) : 0;

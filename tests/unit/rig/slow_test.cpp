@@ -57,10 +57,14 @@ TEST_P(Variation, MeetsTheOutcomeTargets) {
   EXPECT_EQ(rep.over_events, 0);
   EXPECT_LE(rep.force_rmse_normal_N, 0.02 * rep.normal_full_scale_N);
   // The slip targets (precision and recall 0.95, latency p99 2 frames) are not met on every
-  // variation: docs/rig.md's table has the figures and the reasons. Asserted here is the floor
-  // every variation reaches, so that a regression below it fails.
+  // variation: docs/rig.md's table has the figures and the reasons (an ideal sensor does not
+  // meet them either). Asserted here is the floor every variation reaches, so that a regression
+  // below it fails, and that the measurement loses little to an ideal sensor (at most 0.017 in
+  // any variation when this was written).
   EXPECT_GE(rep.slip.precision, 0.85);
   EXPECT_GE(rep.slip.recall, 0.80);
+  EXPECT_GE(rep.slip.precision, rep.slip.ideal_precision - 0.03);
+  EXPECT_GE(rep.slip.recall, rep.slip.ideal_recall - 0.03);
 }
 
 INSTANTIATE_TEST_SUITE_P(Grid, Variation,

@@ -26,10 +26,46 @@ struct SlipMetrics {
   std::uint64_t false_negatives = 0;
   std::uint64_t onsets = 0;         // true slip episodes that began
   std::uint64_t missed_onsets = 0;  // of which no SLIP ever covered (counted as kMissedLatency)
+  // The same element-frame score for an ideal sensor: the paper's test (centroid change above the
+  // threshold) on the true shear displacement of each visible element, without noise or
+  // centroiding error. What the detection principle itself reaches against this truth.
+  double ideal_precision = 0;
+  double ideal_recall = 0;
 };
 
 // Latency given to an onset that no SLIP covered within its episode and two frames after.
 inline constexpr double kMissedLatencyFrames = 1000.0;
+
+// The element-frame slip score of a run against its truth (SlipMetrics), the same for the
+// lockstep and the real-time runs: the measurement's test, the onsets and their latency, and the
+// ideal sensor beside it.
+class SlipScorer {
+ public:
+  // One element of one fingertip in frame `frame` (frames counted from the start): `predicted`
+  // is the measurement's slip test, `threshold_mm` the threshold it used.
+  void add(std::size_t fingertip, std::size_t element, std::uint64_t frame, bool predicted,
+           const ElementTruth& truth, double threshold_mm);
+  // Closes the onsets still waiting (never covered) and fills the metrics. Call once, at the end.
+  void finish(SlipMetrics& out);
+
+ private:
+  struct Element {
+    bool was_sliding = false;
+    bool pending = false;  // an onset not covered yet
+    std::uint64_t onset = 0;
+    std::uint64_t last_true = 0;
+    // The true shear displacement of the last frame, for the ideal sensor's test.
+    bool was_visible = false;
+    double ux_mm = 0;
+    double uy_mm = 0;
+  };
+  std::array<std::array<Element, kElementsPerFingertip>, kFingertips> elements_{};
+  std::vector<double> latencies_;
+  SlipMetrics m_;
+  std::uint64_t ideal_tp_ = 0;
+  std::uint64_t ideal_fp_ = 0;
+  std::uint64_t ideal_fn_ = 0;
+};
 
 // The scenario report: INTERFACES.md section 4, plus a few keys of our own (docs/rig.md).
 struct Report {

@@ -37,19 +37,12 @@ class RunScorer {
   void finish(const World& world, double sim_time_s, std::uint64_t frames);
 
  private:
-  struct ElementScore {
-    bool was_sliding = false;
-    bool pending = false;
-    std::uint64_t onset = 0;
-    std::uint64_t last_true = 0;
-  };
   FrameSample* sample_for(double t);
 
   LockstepResult& run_;
   control::Config cfg_;
   bool record_;
-  std::array<std::array<ElementScore, kElementsPerFingertip>, kFingertips> score_{};
-  std::vector<double> latencies_;
+  SlipScorer slip_;
   double sq_normal_ = 0;
   double sq_shear_ = 0;
   std::uint64_t n_normal_ = 0;
