@@ -367,6 +367,49 @@ struct CpuWindow {
   }
 };
 
+// A thread that sleeps 1 ms at a time at real-time priority (SCHED_FIFO 1, when allowed) and
+// records how late it wakes. Nothing else on the machine can keep it from running, so a wake-up
+// tens of milliseconds late means the whole machine did not run (the host paused it), whatever
+// its steal counter says. It costs a thousand short wake-ups a second.
+class StallProbe {
+ public:
+  StallProbe()
+      : thread_([this](const std::stop_token& stop) {
+          sched_param fifo{};
+          fifo.sched_priority = 1;
+          fifo_ = ::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &fifo) == 0;
+          constexpr std::int64_t kSleepNs = 1'000'000;
+          while (!stop.stop_requested()) {
+            const std::int64_t t0 = util::monotonic_ns();
+            const timespec d{0, kSleepNs};
+            ::clock_nanosleep(CLOCK_MONOTONIC, 0, &d, nullptr);
+            const std::int64_t late = util::monotonic_ns() - t0 - kSleepNs;
+            if (late > max_late_ns_.load()) {
+              max_late_ns_ = late;
+              max_at_ns_ = util::realtime_ns();
+            }
+            if (late > 10'000'000) ++stalls_;
+          }
+        }) {}
+  StallProbe(const StallProbe&) = delete;
+  StallProbe& operator=(const StallProbe&) = delete;
+  void stop() {
+    thread_.request_stop();
+    if (thread_.joinable()) thread_.join();
+  }
+  double max_late_ms() const { return static_cast<double>(max_late_ns_.load()) * 1e-6; }
+  std::int64_t max_at_ns() const { return max_at_ns_.load(); }
+  std::uint64_t stalls_over_10ms() const { return stalls_.load(); }
+  bool fifo() const { return fifo_.load(); }
+
+ private:
+  std::atomic<std::int64_t> max_late_ns_{0};
+  std::atomic<std::int64_t> max_at_ns_{0};
+  std::atomic<std::uint64_t> stalls_{0};
+  std::atomic<bool> fifo_{false};
+  std::jthread thread_;  // last: starts after the members it writes
+};
+
 std::string load_average() {
   std::string load;
   std::getline(std::ifstream("/proc/loadavg"), load);
@@ -421,6 +464,11 @@ struct PipelineResult {
   Dist gige_pair;                  // the same for the later of the two frames of each exposure
   double steal_ms = std::nan("");  // the host's steal time over the window (all CPUs)
   double io_stall_ms = std::nan("");  // every task waiting for I/O at once, over the window
+  // StallProbe over the window: its latest wake-up, when, and wake-ups more than 10 ms late.
+  double probe_max_late_ms = std::nan("");
+  std::int64_t probe_max_at_ns = 0;
+  std::uint64_t probe_stalls = 0;
+  bool probe_fifo = false;
   bool subscriber_idle = false;    // this benchmark's subscriber ran under SCHED_IDLE
   // Frames received before their camera timestamp: the timestamps do not say when the frame was
   // sent (the rig renders render_lead_s before the send instant; above 1/render_lead_s frames
@@ -596,6 +644,7 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
   const std::int64_t m0 = util::monotonic_ns();
   progress(fmt::format("{:.0f} fps: task started; measuring {} s", fps, s.seconds));
   std::int64_t sampled = m0;
+  StallProbe probe;
   capture_until(sub, cap, m0 + static_cast<std::int64_t>(s.seconds * 1e9), children, [&] {
     if (util::monotonic_ns() - sampled > 250'000'000) {
       cpu.sample(pids);
@@ -603,6 +652,11 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
     }
     return false;
   });
+  probe.stop();
+  r.probe_max_late_ms = probe.max_late_ms();
+  r.probe_max_at_ns = probe.max_at_ns();
+  r.probe_stalls = probe.stalls_over_10ms();
+  r.probe_fifo = probe.fifo();
   const bool all_running = rig_p.running() && sensor_p.running() && hand_p.running();
   r.cpu = cpu.end(pids);
   r.major_faults = cpu.major_faults();
@@ -1129,6 +1183,10 @@ json result_json(const RateResult& rr) {
   j["load_average_at_start"] = p.load_at_start;
   j["host_steal_ms_in_window"] = p.steal_ms;
   j["io_full_stall_ms_in_window"] = p.io_stall_ms;
+  j["stall_probe"] = {{"sched_fifo", p.probe_fifo},
+                      {"max_late_ms", p.probe_max_late_ms},
+                      {"max_late_at_ns", p.probe_max_at_ns},
+                      {"wakeups_over_10ms_late", p.probe_stalls}};
   j["major_page_faults_in_window"] = p.major_faults;
   j["benchmark_subscriber_sched_idle"] = p.subscriber_idle;
   j["end_to_end_rig_report"] = to_json(p.e2e);
@@ -1278,8 +1336,8 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
       "| fps | window s | TactileFrames | complete | incomplete | camera frames lost | missed by "
       "the benchmark | gaps > 3 periods, camera / publish (max ms) | commands | e2e samples | "
       "STALE_HOLD events (run) | host steal ms | all tasks stalled on I/O, ms | major page faults, "
-      "sensor_node / hand_node / rig | rig |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "sensor_node / hand_node / rig | stall probe: latest wake-up ms (> 10 ms) | rig |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const RateResult& rr : rs) {
     const PipelineResult& p = rr.pipe;
     const auto stale = p.events.find("EVENT_KIND_STALE_HOLD");
@@ -1291,7 +1349,7 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
         fault("sensor_node") + " / " + fault("hand_node") + " / " + fault("rig");
     std::printf(
         "| %s | %.1f | %llu | %llu | %llu | %llu | %llu | %llu / %llu (%.1f / %.1f) | %llu | %zu "
-        "| %llu | %.0f | %.1f | %s | %s |\n",
+        "| %llu | %.0f | %.1f | %s | %.1f (%llu)%s | %s |\n",
         row_label(rr, s).c_str(), p.window_s, static_cast<unsigned long long>(p.frames),
         static_cast<unsigned long long>(p.frames_complete),
         static_cast<unsigned long long>(p.frames_incomplete),
@@ -1301,7 +1359,9 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
         static_cast<unsigned long long>(p.publish_gaps_over_stale), p.max_camera_gap_ms,
         p.max_publish_gap_ms, static_cast<unsigned long long>(p.commands), p.e2e.n,
         static_cast<unsigned long long>(stale == p.events.end() ? 0 : stale->second), p.steal_ms,
-        p.io_stall_ms, faults.c_str(), p.rig_counters.c_str());
+        p.io_stall_ms, faults.c_str(), p.probe_max_late_ms,
+        static_cast<unsigned long long>(p.probe_stalls), p.probe_fifo ? "" : " (not FIFO)",
+        p.rig_counters.c_str());
   }
   std::printf(
       "\nStages, p50 / p99 (ms):\n\n"
@@ -1386,6 +1446,15 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
           "window (steal): while it does, every process stalls at once, and a tail latency of that "
           "size is the machine's, not the pipeline's.\n",
           row_label(rr, s).c_str(), p.steal_ms);
+    if (p.probe_stalls > 0)
+      std::printf(
+          "\nNOTE %s fps: a thread sleeping 1 ms at a time%s woke up to %.1f ms late (%llu times "
+          "more than 10 ms): %s\n",
+          row_label(rr, s).c_str(), p.probe_fifo ? " at real-time priority" : "",
+          p.probe_max_late_ms, static_cast<unsigned long long>(p.probe_stalls),
+          p.probe_fifo ? "nothing on this machine can delay it, so the machine itself did not run "
+                         "(a pause by the host); a tail latency of that size is the machine's."
+                       : "it ran at the normal policy, so the machine may have been busy.");
     if (p.io_stall_ms > 5.0)
       std::printf(
           "\nNOTE %s fps: every task of this machine waited for I/O at once for %.1f ms of the "
