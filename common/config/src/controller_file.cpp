@@ -29,6 +29,7 @@ const DoubleField kDoubles[] = {
     {"approach_speed_mps", &Config::approach_speed_mps},
     {"recompress_gain_mps", &Config::recompress_gain_mps},
     {"recompress_duration_s", &Config::recompress_duration_s},
+    {"recompress_max_f2_fraction", &Config::recompress_max_f2_fraction},
     {"backoff_speed_mps", &Config::backoff_speed_mps},
     {"max_finger_speed_mps", &Config::max_finger_speed_mps},
     {"cap_x_m", &Config::cap_x_m},

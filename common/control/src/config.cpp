@@ -82,6 +82,8 @@ void Config::validate() const {
   positive("recompress_gain_mps", recompress_gain_mps);
   at_most("recompress_gain_mps", recompress_gain_mps, "max_finger_speed_mps", max_finger_speed_mps);
   positive("recompress_duration_s", recompress_duration_s);
+  positive("recompress_max_f2_fraction", recompress_max_f2_fraction);
+  at_most("recompress_max_f2_fraction", recompress_max_f2_fraction, "1", 1.0);
   positive("backoff_speed_mps", backoff_speed_mps);
   at_most("backoff_speed_mps", backoff_speed_mps, "max_finger_speed_mps", max_finger_speed_mps);
 

@@ -43,6 +43,7 @@ FingerSpeedEstimator::FingerSpeedEstimator(const Config& cfg)
     : approach_speed_(cfg.approach_speed_mps),
       recompress_gain_(cfg.recompress_gain_mps),
       recompress_duration_(cfg.recompress_duration_s),
+      recompress_limit_n_(cfg.recompress_max_f2_fraction * cfg.f2_n),
       backoff_speed_(cfg.backoff_speed_mps),
       max_speed_(cfg.max_finger_speed_mps) {
   reset();
@@ -90,6 +91,11 @@ FingerSpeedOutput FingerSpeedEstimator::update(
         v = approach_speed_ * kSqueeze;
         action = FingerAction::kApproach;
       }
+    } else if ((ff.slip || before == FingerAction::kRecompress) &&
+               ff.max_fz_n >= recompress_limit_n_) {
+      // No headroom left under F2: squeezing on would only trip OVER. Hold the grip.
+      action = FingerAction::kHold;
+      recompress_until_[f] = kNever;
     } else if (ff.slip) {
       // Fig. 6: the element with the largest normal force gives the direction, its inward
       // normal; the re-compressive velocity adds to the current one.

@@ -67,6 +67,7 @@ const std::vector<std::string>& controller_keys() {
       "approach_speed_mps",
       "recompress_gain_mps",
       "recompress_duration_s",
+      "recompress_max_f2_fraction",
       "backoff_speed_mps",
       "max_finger_speed_mps",
       "safe_height_m",

@@ -205,6 +205,46 @@ TEST(FingerSpeedEstimator, RecompressionEndsAfterItsDurationWithoutSlip) {
   EXPECT_DOUBLE_EQ(out.velocity_mps[0].z, hand.cfg().recompress_gain_mps);
 }
 
+TEST(FingerSpeedEstimator, AGripNearF2HoldsInsteadOfReCompressing) {
+  Hand hand;
+  const double limit = hand.cfg().recompress_max_f2_fraction * hand.cfg().f2_n;
+  ASSERT_LT(limit, hand.cfg().f2_n);
+  // Just under the limit: the paper's re-compression.
+  hand.press(0, 0, limit - 0.01);
+  hand.slip(0, 0, 0, 0.01);
+  FingerSpeedOutput out = hand.update(FingerMode::kMove, 1.0);
+  EXPECT_EQ(out.action[0], FingerAction::kRecompress);
+  EXPECT_DOUBLE_EQ(out.velocity_mps[0].z, hand.cfg().recompress_gain_mps);
+  // The squeeze brings F_z to the limit: the re-compression under way stops there, although its
+  // duration has not run out and the fingertip is still under F2.
+  hand.press(0, 0, limit);
+  out = hand.update(FingerMode::kMove, 1.01);
+  EXPECT_EQ(out.action[0], FingerAction::kHold);
+  expect_vec(out.velocity_mps[0], {0, 0, 0}, "at the limit");
+  // A slip with no headroom left holds too: no new re-compression, no OVER.
+  hand.slip(0, 0, 0, 0.01);
+  out = hand.update(FingerMode::kMove, 1.02);
+  EXPECT_EQ(out.action[0], FingerAction::kHold);
+  EXPECT_FALSE(out.recompress_started[0]);
+  EXPECT_FALSE(out.over_started[0]);
+  // Back under the limit (the grip relaxed), a slip re-compresses again.
+  hand.press(0, 0, limit - 0.2);
+  hand.slip(0, 0, 0, 0.01);
+  out = hand.update(FingerMode::kMove, 1.03);
+  EXPECT_EQ(out.action[0], FingerAction::kRecompress);
+  EXPECT_TRUE(out.recompress_started[0]);
+}
+
+TEST(FingerSpeedEstimator, AFractionOfOneIsThePapersRule) {
+  Config cfg;
+  cfg.recompress_max_f2_fraction = 1.0;
+  Hand hand(cfg);
+  hand.press(0, 0, 0.95 * cfg.f2_n);  // above the default's limit, under F2
+  hand.slip(0, 0, 0, 0.01);
+  const FingerSpeedOutput out = hand.update(FingerMode::kMove, 1.0);
+  EXPECT_EQ(out.action[0], FingerAction::kRecompress);
+}
+
 TEST(FingerSpeedEstimator, AFrameSeenBeforeDoesNotReCompressAgain) {
   Hand hand;
   hand.press(0, 0, 1.0);

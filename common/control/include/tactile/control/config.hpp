@@ -41,6 +41,11 @@ struct Config {
   double approach_speed_mps = 0.005;    // SEARCH: closing speed along z_f
   double recompress_gain_mps = 0.003;   // speed added along the inward normal per slip frame
   double recompress_duration_s = 0.05;  // a re-compression lasts this long after the last slip
+  // A fingertip whose largest F_z has reached this fraction of F2 does not re-compress: it holds.
+  // Re-compression speeds add up frame by frame; a grip pushed to F2 trips OVER, backs off to
+  // just under F2, and the next slip pushes it over again within a frame (a chatter at F2 seen in
+  // real-time runs with a light F1). 1 is the paper's rule: OVER alone stops the squeeze.
+  double recompress_max_f2_fraction = 0.9;
   double backoff_speed_mps = 0.001;     // OVER: speed away from the object along -z_f
   double max_finger_speed_mps = 0.01;   // bound on every fingertip velocity's magnitude
 

@@ -9,6 +9,8 @@
 //   kMove    hold (0); on SLIP of a fresh frame, add recompress_gain along the inward normal of
 //            the fingertip's element with the largest F_z to the current velocity, bounded by
 //            max_finger_speed; the re-compression lasts recompress_duration after the last slip.
+//            A fingertip whose largest F_z has reached recompress_max_f2_fraction of F2 holds
+//            instead (no headroom left: squeezing on would only trip OVER).
 //   OVER     in any driven mode, and before everything else: stop squeezing and back off along
 //            -z_f at backoff_speed until the fingertip is under F2 again.
 #include <array>
@@ -50,6 +52,7 @@ class FingerSpeedEstimator {
   double approach_speed_;
   double recompress_gain_;
   double recompress_duration_;
+  double recompress_limit_n_;  // recompress_max_f2_fraction * F2
   double backoff_speed_;
   double max_speed_;
 
