@@ -167,11 +167,17 @@ std::string ms(double x, int digits = 3) {
 // While it lives, the calling thread (and the threads it starts: a ZeroMQ context's I/O thread)
 // runs under SCHED_IDLE, only when no other thread wants a CPU: the benchmark's own subscriber
 // then does not compete with the programs it measures for this machine's two cores. Without the
-// permission, the benchmark says so and runs at the normal policy.
+// permission (root), the benchmark says so and runs at the normal policy.
 class IdleScheduling {
  public:
   explicit IdleScheduling(bool wanted) {
     if (!wanted) return;
+    // Without privilege a thread cannot leave SCHED_IDLE again (RLIMIT_NICE), and neither could
+    // the programs forked from it: stay at the normal policy.
+    if (::geteuid() != 0) {
+      progress("not root: the benchmark's subscriber runs at the normal policy");
+      return;
+    }
     const sched_param none{};
     active_ = ::sched_setscheduler(0, SCHED_IDLE, &none) == 0;
     if (!active_)
