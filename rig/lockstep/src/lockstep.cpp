@@ -425,6 +425,14 @@ std::string report_json(const Report& r) {
   const auto opt_int = [&o](const std::optional<int>& v) {
     o += v ? std::to_string(*v) : std::string("null");
   };
+  // "precision": p, "recall": r (the measured score and the ideal sensor's).
+  const auto precision_recall = [&](double precision, double recall) {
+    key("precision");
+    json_number(o, precision);
+    o += ", ";
+    key("recall");
+    json_number(o, recall);
+  };
   o += "{";
   key("completed");
   o += r.completed ? "true" : "false";
@@ -458,11 +466,7 @@ std::string report_json(const Report& r) {
   o += ",\n ";
   key("slip");
   o += "{";
-  key("precision");
-  json_number(o, r.slip.precision);
-  o += ", ";
-  key("recall");
-  json_number(o, r.slip.recall);
+  precision_recall(r.slip.precision, r.slip.recall);
   o += ", ";
   key("latency_frames_p50");
   json_number(o, r.slip.latency_frames_p50);
@@ -487,11 +491,7 @@ std::string report_json(const Report& r) {
   o += ",\n          ";
   key("ideal_sensor");
   o += "{";
-  key("precision");
-  json_number(o, r.slip.ideal_precision);
-  o += ", ";
-  key("recall");
-  json_number(o, r.slip.ideal_recall);
+  precision_recall(r.slip.ideal_precision, r.slip.ideal_recall);
   o += "}},\n ";
   key("force_rmse_N");
   o += "{";
