@@ -18,13 +18,6 @@
 namespace tactile::rig {
 namespace {
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
-  return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
-}
-
 // splitmix64: independent seeds for the noise pools and frame offsets from the scenario seed.
 std::uint64_t mix(std::uint64_t x) {
   x += 0x9E3779B97F4A7C15ULL;
@@ -38,6 +31,13 @@ double ratio(std::uint64_t part, std::uint64_t rest) {
 }
 
 }  // namespace
+
+double nearest_rank_percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
+  return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
+}
 
 void SlipScorer::add(std::size_t i, std::size_t k, std::uint64_t frame, bool predicted,
                      const ElementTruth& et, double thr) {
@@ -88,8 +88,8 @@ void SlipScorer::finish(SlipMetrics& out) {
   m_.recall = ratio(m_.true_positives, m_.false_negatives);
   m_.ideal_precision = ratio(ideal_tp_, ideal_fp_);
   m_.ideal_recall = ratio(ideal_tp_, ideal_fn_);
-  m_.latency_frames_p50 = percentile(latencies_, 0.50);
-  m_.latency_frames_p99 = percentile(latencies_, 0.99);
+  m_.latency_frames_p50 = nearest_rank_percentile(latencies_, 0.50);
+  m_.latency_frames_p99 = nearest_rank_percentile(latencies_, 0.99);
   out = m_;
 }
 

@@ -37,13 +37,6 @@ std::span<const std::uint8_t> bytes_of(const std::string& s) {
   return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
 }
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
-  return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
-}
-
 void fill_truth_message(const GroundTruth& gt, std::int64_t now_ns, v1::GroundTruth& out) {
   static const char* kIds[kFingertips] = {"left", "right"};
   out.set_time_ns(now_ns);
@@ -460,7 +453,8 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
   if (ended && rep.completed) rep.end_reason = "done";
   if (!latencies_ms.empty()) {
     result.latency_samples = latencies_ms.size();
-    rep.latency_ms = Report::Latency{percentile(latencies_ms, 0.50), percentile(latencies_ms, 0.99),
+    rep.latency_ms = Report::Latency{nearest_rank_percentile(latencies_ms, 0.50),
+                                     nearest_rank_percentile(latencies_ms, 0.99),
                                      *std::max_element(latencies_ms.begin(), latencies_ms.end())};
   }
   util::log_info(
