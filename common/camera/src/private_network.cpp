@@ -17,6 +17,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "tactile/util/fd.hpp"
+
 namespace tactile::camera {
 
 namespace {
@@ -25,20 +27,7 @@ std::string errno_text(int error) {
   return std::strerror(error);
 }
 
-// A file descriptor closed on scope exit.
-class Fd {
- public:
-  explicit Fd(int fd) : fd_(fd) {}
-  ~Fd() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  Fd(const Fd&) = delete;
-  Fd& operator=(const Fd&) = delete;
-  int get() const { return fd_; }
-
- private:
-  int fd_;
-};
+using util::Fd;
 
 in_addr parse_ipv4(std::string_view text) {
   const std::string s(text);

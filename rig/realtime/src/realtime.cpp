@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 #include <sys/timerfd.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -20,6 +19,7 @@
 #include "tactile/rig/scoring.hpp"
 #include "tactile/rig/truth.hpp"
 #include "tactile/util/clock.hpp"
+#include "tactile/util/fd.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
@@ -81,27 +81,22 @@ void fill_truth_message(const GroundTruth& gt, std::int64_t now_ns, v1::GroundTr
 class WakeTimer {
  public:
   WakeTimer() : fd_(::timerfd_create(CLOCK_REALTIME, TFD_NONBLOCK | TFD_CLOEXEC)) {
-    if (fd_ < 0)
+    if (fd_.get() < 0)
       util::log_warn("no timerfd ({}): frames start up to a millisecond late",
                      std::strerror(errno));
   }
-  ~WakeTimer() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  WakeTimer(const WakeTimer&) = delete;
-  WakeTimer& operator=(const WakeTimer&) = delete;
-  int fd() const { return fd_; }
+  int fd() const { return fd_.get(); }
   // Re-arming clears an expiry not yet read, so the descriptor is readable only from `at_ns` on.
   void arm_at(std::int64_t at_ns) const {
-    if (fd_ < 0) return;
+    if (fd_.get() < 0) return;
     itimerspec when{};
     when.it_value.tv_sec = static_cast<time_t>(at_ns / 1'000'000'000);
     when.it_value.tv_nsec = static_cast<long>(at_ns % 1'000'000'000);
-    ::timerfd_settime(fd_, TFD_TIMER_ABSTIME, &when, nullptr);
+    ::timerfd_settime(fd_.get(), TFD_TIMER_ABSTIME, &when, nullptr);
   }
 
  private:
-  int fd_;
+  util::Fd fd_;
 };
 
 // A truth kept until the measured frames of its instant arrive (a few frame periods).
