@@ -6,6 +6,7 @@
 #include "src/hand_config.hpp"
 #include "src/hand_node.hpp"
 #include "tactile/util/log.hpp"
+#include "tactile/util/realtime.hpp"
 #include "tactile/util/stop.hpp"
 #include "tactile/util/text.hpp"
 #include "tactile/wire/envelope.hpp"
@@ -47,6 +48,10 @@ int run(int argc, char** argv) {
     if (!subscribe.empty()) cfg.subscribe = subscribe;
     if (!arm.empty()) cfg.arm = arm;
     if (!events.empty()) cfg.events = events;
+    // Before any thread exists, so that ZeroMQ's threads inherit it.
+    tactile::util::apply_realtime_scheduling(cfg.realtime, config_path + ": realtime");
+    if (cfg.realtime.priority != 0 || cfg.realtime.lock_memory)
+      tactile::util::log_info("real-time scheduling: {}", tactile::util::describe(cfg.realtime));
     tactile::util::install_stop_handlers();
     tactile::wire::install_protobuf_log_handler();
     zmq::context_t ctx;

@@ -9,6 +9,7 @@
 #include "src/sensor_config.hpp"
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/util/log.hpp"
+#include "tactile/util/realtime.hpp"
 #include "tactile/util/stop.hpp"
 #include "tactile/util/text.hpp"
 #include "tactile/wire/envelope.hpp"
@@ -94,6 +95,10 @@ int run(int argc, char** argv) {
     for (const auto& w : warnings)
       tactile::util::log_warn("{}", w);
 
+    // Before any thread exists, so that ZeroMQ's and Aravis's threads inherit it.
+    tactile::util::apply_realtime_scheduling(cfg.realtime, config_path + ": realtime");
+    if (cfg.realtime.priority != 0 || cfg.realtime.lock_memory)
+      tactile::util::log_info("real-time scheduling: {}", tactile::util::describe(cfg.realtime));
     tactile::util::install_stop_handlers();
     tactile::wire::install_protobuf_log_handler();
     zmq::context_t ctx;

@@ -2,6 +2,7 @@
 
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/config/controller_file.hpp"
+#include "tactile/config/realtime_section.hpp"
 #include "tactile/config/yaml.hpp"
 
 namespace tactile::hand {
@@ -13,7 +14,7 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
     for (const auto& k : root.unknown_keys({"format", "fingertips", "subscribe", "arm", "events",
                                             "heartbeat_period_s", "control_period_s",
                                             "arm_timeout_s", "pair_window_s", "start_after_frames",
-                                            "controller", "security"})) {
+                                            "controller", "security", "realtime"})) {
       warnings->push_back(path.string() + ": unknown key '" + k + "' ignored");
     }
   }
@@ -91,6 +92,7 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
         wire::ClientSecurity{own, load("sensor_public_key", wire::load_public_key)};
     cfg.arm_security = wire::ClientSecurity{own, load("arm_public_key", wire::load_public_key)};
   }
+  if (auto rt = root.find("realtime")) cfg.realtime = config::parse_realtime_section(*rt, warnings);
   return cfg;
 }
 

@@ -9,6 +9,7 @@
 #include "tactile/calibration.hpp"
 #include "tactile/control/config.hpp"
 #include "tactile/control/types.hpp"
+#include "tactile/util/realtime.hpp"
 #include "tactile/wire/security.hpp"
 
 namespace tactile::hand {
@@ -42,6 +43,8 @@ struct HandConfig {
   // CURVE on both links (docs/security.md); unset: plain TCP.
   std::optional<wire::ClientSecurity> sensor_security;  // SUB: the sensor_node's public key
   std::optional<wire::ClientSecurity> arm_security;     // DEALER: the arm controller's public key
+  // SCHED_FIFO and locked memory for the whole program (docs/deployment.md); default: neither.
+  util::RealtimeScheduling realtime;
 };
 
 // Loads and checks the file; throws config::ConfigError naming file, line, key and value.

@@ -1,6 +1,7 @@
 #include "sensor_config.hpp"
 
 #include "tactile/config/calibration_file.hpp"
+#include "tactile/config/realtime_section.hpp"
 #include "tactile/config/yaml.hpp"
 
 namespace tactile::sensor {
@@ -39,8 +40,8 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
     for (const auto& k : n.unknown_keys(known))
       warnings->push_back(path.string() + ": unknown key '" + k + "' ignored");
   };
-  warn(root,
-       {"format", "publish", "stats_period_s", "raw_frames", "measurement", "cameras", "security"});
+  warn(root, {"format", "publish", "stats_period_s", "raw_frames", "measurement", "cameras",
+              "security", "realtime"});
   const config::Node format = root["format"];
   if (format.as_string() != kSensorConfigFormat) {
     format.fail(std::string("must be '") + kSensorConfigFormat + "', is " + format.text());
@@ -77,6 +78,7 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
       key.fail(e.what());
     }
   }
+  if (auto rt = root.find("realtime")) cfg.realtime = config::parse_realtime_section(*rt, warnings);
   const config::Node cams = root["cameras"];
   if (cams.size() == 0) cams.fail("must list at least one camera");
   const auto base = path.parent_path();

@@ -8,6 +8,7 @@
 #include "tactile/calibration.hpp"
 #include "tactile/camera/aravis_camera.hpp"
 #include "tactile/extractor.hpp"
+#include "tactile/util/realtime.hpp"
 #include "tactile/wire/security.hpp"
 
 namespace tactile::sensor {
@@ -38,6 +39,8 @@ struct SensorConfig {
   std::vector<CameraConfig> cameras;
   // CURVE on the PUB socket (docs/security.md); unset: plain TCP.
   std::optional<wire::ServerSecurity> security;
+  // SCHED_FIFO and locked memory for the whole program (docs/deployment.md); default: neither.
+  util::RealtimeScheduling realtime;
 };
 
 SensorConfig default_sensor_config();

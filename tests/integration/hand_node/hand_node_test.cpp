@@ -1,7 +1,11 @@
 // hand_node as a real process between a test publisher of TactileFrames and a test arm
 // controller, over real ZeroMQ sockets: the commands and events of scripted sequences.
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <signal.h>
+#include <sys/mman.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -10,9 +14,11 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include "garbage.hpp"
@@ -381,6 +387,8 @@ class HandNodeRun {
     return r;
   }
 
+  std::filesystem::path config() const { return dir_ / "hand.yaml"; }
+
  private:
   TempDir dir_;
   std::array<Calibration, 2> cals_;
@@ -557,6 +565,76 @@ TEST(HandNode, HeartbeatsKeepTheirPeriodWhenNothingWakesIt) {
   EXPECT_LT(max_silence_ms, 40.0) << "heartbeat period 10 ms";
   std::fprintf(stderr, "[measured] longest silence on the arm link %.1f ms (heartbeat 10 ms)\n",
                max_silence_ms);
+}
+
+// Whether this machine lets a process take SCHED_FIFO priority 7 and lock its memory (root, or
+// CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits): tried in a child, which exits.
+bool realtime_allowed() {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    sched_param p{};
+    p.sched_priority = 7;
+    const bool ok =
+        ::sched_setscheduler(0, SCHED_FIFO, &p) == 0 && ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+    ::_exit(ok ? 0 : 1);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
+// Policy and real-time priority of each of a process's threads, from /proc/PID/task/*/stat
+// (fields 41 and 40, counted after the command name, which may hold spaces).
+std::vector<std::pair<int, int>> thread_scheduling(pid_t pid) {
+  std::vector<std::pair<int, int>> out;
+  for (const auto& t :
+       std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/task")) {
+    std::ifstream in(t.path() / "stat");
+    std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::istringstream fields(stat.substr(stat.rfind(')') + 2));
+    std::vector<std::string> f{std::istream_iterator<std::string>(fields), {}};
+    if (f.size() > 38) out.emplace_back(std::stoi(f[38]), std::stoi(f[37]));
+  }
+  return out;
+}
+
+TEST(HandNode, RealtimeSectionPutsEveryThreadUnderSchedFifoOrSaysWhyNot) {
+  HandNodeRun run("realtime: {priority: 7, lock_memory: true}\n");
+  Process hand({TACTILE_HAND_NODE_PATH, "--config", run.config().string(), "--subscribe",
+                "tcp://127.0.0.1:9", "--arm", "tcp://127.0.0.1:9"});
+  if (!realtime_allowed()) {
+    // Without the privilege: one line naming the file, the section and how to grant it.
+    const auto r = hand.wait(10s);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("hand.yaml: realtime: SCHED_FIFO priority 7 refused"), std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("CAP_SYS_NICE"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    return;
+  }
+  // The sockets (and with them ZeroMQ's I/O thread) exist once it says what it subscribes to.
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (hand.err_so_far().find("subscribing to") == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(10ms);
+  ASSERT_NE(hand.err_so_far().find("real-time scheduling: SCHED_FIFO priority 7, memory locked"),
+            std::string::npos)
+      << hand.err_so_far();
+  const auto threads = thread_scheduling(hand.pid());
+  ASSERT_GE(threads.size(), 2U) << "hand_node and ZeroMQ's threads";
+  for (const auto& [policy, priority] : threads) {
+    EXPECT_EQ(policy, SCHED_FIFO);
+    EXPECT_EQ(priority, 7);
+  }
+  std::ifstream status("/proc/" + std::to_string(hand.pid()) + "/status");
+  std::string line;
+  std::string locked;
+  while (std::getline(status, line))
+    if (line.rfind("VmLck:", 0) == 0) locked = line;
+  EXPECT_EQ(locked.find(" 0 kB"), std::string::npos) << locked;
+  hand.signal(SIGTERM);
+  const auto r = hand.wait(10s);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
 TEST(HandNode, BadConfigurationIsOneClearLine) {

@@ -2,10 +2,18 @@
 // (arv-fake-gv-camera-0.8) in a private network namespace: real GVCP and GVSP packets, real
 // ZeroMQ, real files.
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <signal.h>
+#include <sys/mman.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <sstream>
 
 #include "process.hpp"
 #include "support/child_process.hpp"
@@ -132,6 +140,91 @@ TEST_F(SensorNodeAgainstAravisFake, WaitsForAnAbsentCameraAndStopsCleanly) {
   wire::Subscriber sub(ctx, {endpoint_}, {"frame/left"});
   const Collected c = collect(sub, 10, 20s);
   EXPECT_GE(c.frames.size(), 10U) << node.err_so_far();
+  node.signal(SIGTERM);
+  const auto r = node.wait(10s);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+// Whether this machine lets a process take SCHED_FIFO priority 7 and lock its memory: tried in
+// a child, which exits.
+bool realtime_allowed() {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    sched_param p{};
+    p.sched_priority = 7;
+    const bool ok =
+        ::sched_setscheduler(0, SCHED_FIFO, &p) == 0 && ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+    ::_exit(ok ? 0 : 1);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
+// Each thread's name, policy and real-time priority, from /proc/PID/task/*/{comm,stat} (stat's
+// fields 41 and 40, counted after the command name, which may hold spaces).
+struct ThreadScheduling {
+  std::string name;
+  int policy = -1;
+  int priority = -1;
+};
+std::vector<ThreadScheduling> thread_scheduling(pid_t pid) {
+  std::vector<ThreadScheduling> out;
+  for (const auto& t :
+       std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/task")) {
+    std::ifstream in(t.path() / "stat");
+    const std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::istringstream fields(stat.substr(stat.rfind(')') + 2));
+    const std::vector<std::string> f{std::istream_iterator<std::string>(fields), {}};
+    ThreadScheduling s;
+    std::ifstream(t.path() / "comm") >> s.name;
+    if (f.size() > 38) {
+      s.policy = std::stoi(f[38]);
+      s.priority = std::stoi(f[37]);
+    }
+    out.push_back(s);
+  }
+  return out;
+}
+
+TEST_F(SensorNodeAgainstAravisFake, RealtimeSectionCoversAravisAndZeroMQThreadsOrSaysWhyNot) {
+  std::ofstream(dir_ / "sensor.yaml") << "format: tactile-sensor/1\n"
+                                         "publish: "
+                                      << endpoint_
+                                      << "\n"
+                                         "realtime: {priority: 7, lock_memory: true}\n"
+                                         "cameras:\n"
+                                         "  - {sensor_id: left, camera: 127.0.0.2, calibration: "
+                                         "left.yaml, reference: zero.pgm, fps: 100}\n";
+  const std::vector<std::string> argv{TACTILE_SENSOR_NODE_PATH, "--config",
+                                      (dir_ / "sensor.yaml").string()};
+  if (!realtime_allowed()) {
+    const auto r = testing::run(argv);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("sensor.yaml: realtime: SCHED_FIFO priority 7 refused"), std::string::npos)
+        << r.err;
+    return;
+  }
+  ChildProcess fake({"arv-fake-gv-camera-0.8", "-i", "127.0.0.2", "-s", "TACTILE01"});
+  Process node(argv);
+  zmq::context_t ctx;
+  wire::Subscriber sub(ctx, {endpoint_}, {"frame/left"});
+  // Frames flow: Aravis's stream thread and ZeroMQ's I/O thread are running.
+  const Collected c = collect(sub, 20, 20s);
+  ASSERT_GE(c.frames.size(), 20U) << node.err_so_far() << fake.output();
+  EXPECT_NE(node.err_so_far().find("real-time scheduling: SCHED_FIFO priority 7, memory locked"),
+            std::string::npos)
+      << node.err_so_far();
+  const auto threads = thread_scheduling(node.pid());
+  ASSERT_GE(threads.size(), 4U) << "main, pipeline, Aravis's stream thread, ZeroMQ's threads";
+  std::string names;
+  for (const auto& t : threads) {
+    EXPECT_EQ(t.policy, SCHED_FIFO) << t.name;
+    EXPECT_EQ(t.priority, 7) << t.name;
+    names += " " + t.name;
+  }
+  std::fprintf(stderr, "[measured] %zu threads under SCHED_FIFO 7:%s\n", threads.size(),
+               names.c_str());
   node.signal(SIGTERM);
   const auto r = node.wait(10s);
   EXPECT_EQ(r.exit_code, 0) << r.err;

@@ -1,5 +1,5 @@
-// hand_node's configuration: pair_window_s and start_after_frames are read, default on, and a bad
-// value is refused by a line naming the file, the key and the value.
+// hand_node's configuration: pair_window_s, start_after_frames and realtime are read with their
+// defaults, and a bad value is refused by a line naming the file, the key and the value.
 #include "hand_config.hpp"
 
 #include <gtest/gtest.h>
@@ -70,6 +70,47 @@ TEST_F(HandConfigFile, StartAfterFramesDefaultsTo20AndIsRead) {
 TEST_F(HandConfigFile, BadPairWindowNamesFileKeyAndValue) {
   for (const char* bad : {"-0.5", "2", "soon"})
     expect_refused("pair_window_s", bad);
+}
+
+TEST_F(HandConfigFile, RealtimeIsOffByDefaultAndIsRead) {
+  std::vector<std::string> warnings;
+  const util::RealtimeScheduling off = load_hand_config(write(""), &warnings).realtime;
+  EXPECT_EQ(off.priority, 0);
+  EXPECT_FALSE(off.lock_memory);
+  const util::RealtimeScheduling on =
+      load_hand_config(write("realtime: {priority: 20, lock_memory: true}\n"), &warnings).realtime;
+  EXPECT_EQ(on.priority, 20);
+  EXPECT_TRUE(on.lock_memory);
+  const util::RealtimeScheduling lock_only =
+      load_hand_config(write("realtime: {lock_memory: true}\n"), &warnings).realtime;
+  EXPECT_EQ(lock_only.priority, 0);
+  EXPECT_TRUE(lock_only.lock_memory);
+  EXPECT_TRUE(warnings.empty()) << warnings.front();
+  load_hand_config(write("realtime: {priority: 5, lock: true}\n"), &warnings);
+  ASSERT_EQ(warnings.size(), 1U);
+  EXPECT_NE(warnings[0].find("hand_node.yaml: unknown key 'realtime.lock' ignored"),
+            std::string::npos)
+      << warnings[0];
+}
+
+TEST_F(HandConfigFile, BadRealtimeNamesFileKeyAndValue) {
+  const auto refused = [&](const std::string& section, const std::string& key,
+                           const std::string& value) {
+    const fs::path p = write("realtime: " + section + "\n");
+    try {
+      load_hand_config(p, nullptr);
+      ADD_FAILURE() << section << " was accepted";
+    } catch (const config::ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(p.string()), std::string::npos) << what;
+      EXPECT_NE(what.find("'" + key + "'"), std::string::npos) << what;
+      EXPECT_NE(what.find(value), std::string::npos) << what;
+    }
+  };
+  for (const char* bad : {"0", "99", "-1", "2.5", "high"})
+    refused(std::string("{priority: ") + bad + "}", "realtime.priority", bad);
+  refused("{priority: 10, lock_memory: maybe}", "realtime.lock_memory", "maybe");
+  refused("10", "realtime", "10");
 }
 
 }  // namespace
