@@ -18,6 +18,14 @@ constexpr const char* kHowToGrant =
     "cap_add: [SYS_NICE, IPC_LOCK] in docker compose), or raise its rtprio and memlock limits "
     "(/etc/security/limits.conf); or remove the realtime section";
 
+// AddressSanitizer and ThreadSanitizer map terabytes of shadow memory: mlockall would try to
+// fault all of it in.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kShadowMemory = true;
+#else
+constexpr bool kShadowMemory = false;
+#endif
+
 }  // namespace
 
 void apply_realtime_scheduling(const RealtimeScheduling& r, const std::string& where) {
@@ -34,6 +42,12 @@ void apply_realtime_scheduling(const RealtimeScheduling& r, const std::string& w
                                            r.priority, std::strerror(e), kHowToGrant));
     }
   }
+  if (r.lock_memory && kShadowMemory)
+    throw std::runtime_error(
+        fmt::format("{}: lock_memory cannot be used by a build with AddressSanitizer or "
+                    "ThreadSanitizer (mlockall would lock their terabytes of shadow memory); "
+                    "remove it, or use a build without them",
+                    where));
   if (r.lock_memory && ::mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
     const int e = errno;
     throw std::runtime_error(

@@ -18,7 +18,8 @@ inline constexpr int kMaxRealtimePriority = 98;
 // Applies it to the calling thread and, through inheritance, to every thread and process it
 // starts afterwards: call it before ZeroMQ's context, Aravis's stream threads or any other thread
 // exists. `where` names the setting in the error (e.g. "hand.yaml: realtime"). Throws
-// std::runtime_error with the cause and the ways to grant the privilege when the kernel refuses.
+// std::runtime_error with the cause and the ways to grant the privilege when the kernel refuses,
+// and for lock_memory in a build with AddressSanitizer or ThreadSanitizer.
 void apply_realtime_scheduling(const RealtimeScheduling& r, const std::string& where);
 
 // "SCHED_FIFO priority 10, memory locked", or "the default scheduler": for a start-up log line.
