@@ -49,6 +49,7 @@
 #include "tactile/plot/figure.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/files.hpp"
+#include "tactile/util/realtime.hpp"
 #include "tactile/util/stop.hpp"
 #include "tactile/v1/tactile.pb.h"
 #include "tactile/wire/envelope.hpp"
@@ -76,6 +77,9 @@ struct Settings {
   bool skip_transport = false;
   int runs = 1;                 // pipeline + transport runs per rate (the p50s move between runs)
   bool idle_subscriber = true;  // the benchmark's subscriber under SCHED_IDLE (IdleScheduling)
+  // sensor_node and hand_node under SCHED_FIFO at this priority (their configurations' realtime
+  // section), and the transport alone's receivers and echo likewise (FifoScheduling); 0: none.
+  int realtime_priority = 0;
 };
 
 void progress(const std::string& line) {
@@ -193,6 +197,28 @@ class IdleScheduling {
     if (active_) ::sched_setscheduler(0, SCHED_OTHER, &normal);
   }
   bool active() const { return active_; }
+
+ private:
+  bool active_ = false;
+};
+
+// While it lives, the calling thread (and the threads it starts: Aravis's stream threads, a
+// ZeroMQ context's) runs under SCHED_FIFO at `priority`, as sensor_node and hand_node do with
+// --realtime-priority: the transport alone is then measured like for like. 0: nothing. Throws
+// when the kernel refuses (the programs would refuse it too).
+class FifoScheduling {
+ public:
+  explicit FifoScheduling(int priority) {
+    if (priority == 0) return;
+    util::apply_realtime_scheduling({priority, false}, "--realtime-priority");
+    active_ = true;
+  }
+  FifoScheduling(const FifoScheduling&) = delete;
+  FifoScheduling& operator=(const FifoScheduling&) = delete;
+  ~FifoScheduling() {
+    const sched_param normal{};
+    if (active_) ::sched_setscheduler(0, SCHED_OTHER, &normal);
+  }
 
  private:
   bool active_ = false;
@@ -584,6 +610,14 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
       "rig --write-configs",
       {rig.string(), "--scenario", scenario.string(), "--write-configs", (dir / "config").string()},
       dir / "logs" / "rig.log");
+  if (s.realtime_priority > 0) {
+    for (const char* f : {"sensor_node.yaml", "hand_node.yaml"}) {
+      std::ofstream out(dir / "config" / f, std::ios::app);
+      out << fmt::format("realtime: {{priority: {}}}\n", s.realtime_priority);
+      if (!out)
+        throw std::runtime_error(fmt::format("cannot append to {}", (dir / "config" / f).string()));
+    }
+  }
 
   // Declared before the context: the context's I/O thread starts under it, and ends before it.
   const IdleScheduling idle(s.idle_subscriber);
@@ -970,6 +1004,8 @@ AravisResult run_aravis(const Settings& s, double fps, const fs::path& dir) {
                                              address, tail_of(dir / "logs" / "transport-rig.log")));
     }
   }
+  // Before the receivers: their stream threads inherit it.
+  const FifoScheduling fifo(s.realtime_priority);
   std::vector<std::unique_ptr<camera::AravisCamera>> receivers;
   for (const char* address : kCameraAddresses) {
     camera::AravisCameraOptions o;
@@ -1053,7 +1089,8 @@ struct ZmqResult {
 // Echo process: every message on SUB goes back over DEALER at `reply_bytes`, carrying the
 // sender's stamp and the time it arrived here.
 int zmq_echo(const std::string& pub_endpoint, const std::string& router_endpoint,
-             std::size_t reply_bytes) {
+             std::size_t reply_bytes, int realtime_priority) {
+  util::apply_realtime_scheduling({realtime_priority, false}, "zmq-echo");
   util::install_stop_handlers();
   zmq::context_t ctx;
   wire::Subscriber sub(ctx, {pub_endpoint}, {"frame/"});
@@ -1082,6 +1119,10 @@ ZmqResult run_zmq(const Settings& s, double fps, std::size_t frame_bytes, std::s
   ZmqResult r;
   r.frame_bytes = std::max<std::size_t>(frame_bytes, 24);
   r.command_bytes = std::max<std::size_t>(command_bytes, 24);
+  // Before the context, whose I/O thread inherits it. This side stands for sensor_node's PUB and
+  // for the rig's ROUTER, which in the pipeline runs at the normal policy: with
+  // --realtime-priority the baseline is, if anything, favoured (the "added" figure errs high).
+  const FifoScheduling fifo(s.realtime_priority);
   zmq::context_t ctx;
   wire::Publisher pub(ctx, "tcp://127.0.0.1:*");
   wire::Router router(ctx, "tcp://127.0.0.1:*");
@@ -1092,7 +1133,7 @@ ZmqResult run_zmq(const Settings& s, double fps, std::size_t frame_bytes, std::s
   };
   Child echo("zmq-echo",
              {self.string(), "--zmq-echo", local(pub.endpoint()), local(router.endpoint()),
-              std::to_string(r.command_bytes)},
+              std::to_string(r.command_bytes), std::to_string(s.realtime_priority)},
              dir / "logs" / "zmq-echo.log");
   std::string peer;
   std::vector<std::uint8_t> in;
@@ -1314,8 +1355,14 @@ std::string row_label(const RateResult& rr, const Settings& s) {
 void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
   std::printf(
       "\nTwo cameras, %.0f s measured per rate after the task started (+%.0f s warm-up); "
-      "transport alone %.0f s per rate. Times in ms; CPU in %% of one core.\n\n",
-      s.seconds, s.warmup_s, s.transport_seconds);
+      "transport alone %.0f s per rate. Times in ms; CPU in %% of one core.%s\n\n",
+      s.seconds, s.warmup_s, s.transport_seconds,
+      s.realtime_priority > 0
+          ? fmt::format(" sensor_node, hand_node and the transport alone's ends under SCHED_FIFO "
+                        "{} (--realtime-priority).",
+                        s.realtime_priority)
+                .c_str()
+          : "");
   std::printf(
       "| fps | e2e p50 | e2e p99 | e2e max | transport alone p50 | added p50 | ratio | "
       "(added over the per-frame transport) | incomplete | frames | sensor_node CPU | hand_node "
@@ -1565,6 +1612,7 @@ int run(const Settings& s, const fs::path& self) {
                      {"warmup_s", s.warmup_s},
                      {"transport_seconds", s.transport_seconds},
                      {"runs", s.runs},
+                     {"realtime_priority", s.realtime_priority},
                      {"scenario", s.scenario.string()}};
   for (const double fps : s.rates) {
     for (int run = 1; run <= s.runs; ++run) {
@@ -1615,9 +1663,9 @@ int main(int argc, char** argv) {
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
   // Hidden role: the echo end of the ZeroMQ round trip (started by the benchmark itself).
-  if (argc == 5 && std::string(argv[1]) == "--zmq-echo") {
+  if (argc == 6 && std::string(argv[1]) == "--zmq-echo") {
     try {
-      return tactile::bench::zmq_echo(argv[2], argv[3], std::stoul(argv[4]));
+      return tactile::bench::zmq_echo(argv[2], argv[3], std::stoul(argv[4]), std::stoi(argv[5]));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "zmq-echo: %s\n", e.what());
       return 1;
@@ -1668,6 +1716,11 @@ int main(int argc, char** argv) {
   app.add_flag("!--normal-subscriber", s.idle_subscriber,
                "run the benchmark's own subscriber at the normal policy, competing with the "
                "programs for the CPUs (the default runs it under SCHED_IDLE)");
+  app.add_option("--realtime-priority", s.realtime_priority,
+                 "run sensor_node and hand_node under SCHED_FIFO at this priority (their "
+                 "configuration's realtime section), and the transport alone's receivers and "
+                 "ZeroMQ ends likewise; needs root or CAP_SYS_NICE (default 0: the normal policy)")
+      ->check(CLI::Range(0, 98));
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -1677,6 +1730,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
+    // Refused now rather than after the first run: try it once on this thread and drop it.
+    { const tactile::bench::FifoScheduling probe(s.realtime_priority); }
     return tactile::bench::run(s, self);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "tactile_system_latency_bench: %s\n", e.what());
