@@ -1,14 +1,18 @@
 #include "process.hpp"
 
 #include <fcntl.h>
+#include <sched.h>
 #include <signal.h>
+#include <sys/mman.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -140,6 +144,42 @@ TempDir::TempDir() : path_(make_temp_dir("tactile-test-")) {}
 TempDir::~TempDir() {
   std::error_code ec;
   std::filesystem::remove_all(path_, ec);
+}
+
+bool realtime_allowed(int priority, bool lock) {
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
+  if (pid == 0) {
+    sched_param p{};
+    p.sched_priority = priority;
+    const bool ok = ::sched_setscheduler(0, SCHED_FIFO, &p) == 0 &&
+                    (!lock || ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0);
+    ::_exit(ok ? 0 : 1);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
+std::vector<ThreadScheduling> thread_scheduling(pid_t pid) {
+  std::vector<ThreadScheduling> out;
+  for (const auto& t :
+       std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/task")) {
+    std::ifstream in(t.path() / "stat");
+    const std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    // Fields 40 (rt_priority) and 41 (policy), counted after the command name, which may hold
+    // spaces and ends at the last ')'.
+    std::istringstream fields(stat.substr(stat.rfind(')') + 2));
+    const std::vector<std::string> f{std::istream_iterator<std::string>(fields), {}};
+    ThreadScheduling s;
+    std::ifstream(t.path() / "comm") >> s.name;
+    if (f.size() > 38) {
+      s.policy = std::stoi(f[38]);
+      s.priority = std::stoi(f[37]);
+    }
+    out.push_back(s);
+  }
+  return out;
 }
 
 }  // namespace tactile::testing

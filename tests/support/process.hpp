@@ -61,4 +61,18 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+// Whether this machine lets a process take SCHED_FIFO at `priority` (and, with `lock`, lock its
+// memory: root, CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits): tried in a child,
+// which exits. Never pass `lock` in a sanitizer build: mlockall would fault in the shadow memory.
+bool realtime_allowed(int priority, bool lock);
+
+// A thread of a running process: its name, scheduling policy and real-time priority.
+struct ThreadScheduling {
+  std::string name;
+  int policy = -1;
+  int priority = -1;
+};
+// Every thread of `pid`, from /proc/PID/task/*/{comm,stat}.
+std::vector<ThreadScheduling> thread_scheduling(pid_t pid);
+
 }  // namespace tactile::testing

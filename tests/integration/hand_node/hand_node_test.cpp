@@ -3,9 +3,6 @@
 #include <gtest/gtest.h>
 #include <sched.h>
 #include <signal.h>
-#include <sys/mman.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -14,11 +11,9 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
-#include <iterator>
 #include <map>
 #include <optional>
 #include <set>
-#include <sstream>
 #include <thread>
 
 #include "garbage.hpp"
@@ -567,38 +562,6 @@ TEST(HandNode, HeartbeatsKeepTheirPeriodWhenNothingWakesIt) {
                max_silence_ms);
 }
 
-// Whether this machine lets a process take SCHED_FIFO priority 7 (and lock its memory) (root, or
-// CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits): tried in a child, which exits.
-bool realtime_allowed(bool lock) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    sched_param p{};
-    p.sched_priority = 7;
-    // (Never mlockall in a sanitizer build: it would fault in the shadow memory's terabytes.)
-    const bool ok = ::sched_setscheduler(0, SCHED_FIFO, &p) == 0 &&
-                    (!lock || ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0);
-    ::_exit(ok ? 0 : 1);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
-}
-
-// Policy and real-time priority of each of a process's threads, from /proc/PID/task/*/stat
-// (fields 41 and 40, counted after the command name, which may hold spaces).
-std::vector<std::pair<int, int>> thread_scheduling(pid_t pid) {
-  std::vector<std::pair<int, int>> out;
-  for (const auto& t :
-       std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/task")) {
-    std::ifstream in(t.path() / "stat");
-    std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    std::istringstream fields(stat.substr(stat.rfind(')') + 2));
-    std::vector<std::string> f{std::istream_iterator<std::string>(fields), {}};
-    if (f.size() > 38) out.emplace_back(std::stoi(f[38]), std::stoi(f[37]));
-  }
-  return out;
-}
-
 TEST(HandNode, RealtimeSectionPutsEveryThreadUnderSchedFifoOrSaysWhyNot) {
   // A sanitizer build refuses lock_memory (its shadow memory is terabytes), with one line.
   const bool lock = !TACTILE_SANITIZED;
@@ -615,7 +578,7 @@ TEST(HandNode, RealtimeSectionPutsEveryThreadUnderSchedFifoOrSaysWhyNot) {
                   "}\n");
   Process hand({TACTILE_HAND_NODE_PATH, "--config", run.config().string(), "--subscribe",
                 "tcp://127.0.0.1:9", "--arm", "tcp://127.0.0.1:9"});
-  if (!realtime_allowed(lock)) {
+  if (!testing::realtime_allowed(7, lock)) {
     // Without the privilege: one line naming the file, the section and how to grant it.
     const auto r = hand.wait(10s);
     EXPECT_EQ(r.exit_code, 1) << r.err;
@@ -635,11 +598,11 @@ TEST(HandNode, RealtimeSectionPutsEveryThreadUnderSchedFifoOrSaysWhyNot) {
                                         : "real-time scheduling: SCHED_FIFO priority 7"),
             std::string::npos)
       << hand.err_so_far();
-  const auto threads = thread_scheduling(hand.pid());
+  const auto threads = testing::thread_scheduling(hand.pid());
   ASSERT_GE(threads.size(), 2U) << "hand_node and ZeroMQ's threads";
-  for (const auto& [policy, priority] : threads) {
-    EXPECT_EQ(policy, SCHED_FIFO);
-    EXPECT_EQ(priority, 7);
+  for (const auto& t : threads) {
+    EXPECT_EQ(t.policy, SCHED_FIFO) << t.name;
+    EXPECT_EQ(t.priority, 7) << t.name;
   }
   std::ifstream status("/proc/" + std::to_string(hand.pid()) + "/status");
   std::string line;

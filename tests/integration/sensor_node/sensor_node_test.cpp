@@ -4,16 +4,10 @@
 #include <gtest/gtest.h>
 #include <sched.h>
 #include <signal.h>
-#include <sys/mman.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
-#include <iterator>
-#include <sstream>
 
 #include "process.hpp"
 #include "support/child_process.hpp"
@@ -145,49 +139,6 @@ TEST_F(SensorNodeAgainstAravisFake, WaitsForAnAbsentCameraAndStopsCleanly) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
-// Whether this machine lets a process take SCHED_FIFO priority 7 (and lock its memory): tried in
-// a child, which exits.
-bool realtime_allowed(bool lock) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    sched_param p{};
-    p.sched_priority = 7;
-    // (Never mlockall in a sanitizer build: it would fault in the shadow memory's terabytes.)
-    const bool ok = ::sched_setscheduler(0, SCHED_FIFO, &p) == 0 &&
-                    (!lock || ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0);
-    ::_exit(ok ? 0 : 1);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
-}
-
-// Each thread's name, policy and real-time priority, from /proc/PID/task/*/{comm,stat} (stat's
-// fields 41 and 40, counted after the command name, which may hold spaces).
-struct ThreadScheduling {
-  std::string name;
-  int policy = -1;
-  int priority = -1;
-};
-std::vector<ThreadScheduling> thread_scheduling(pid_t pid) {
-  std::vector<ThreadScheduling> out;
-  for (const auto& t :
-       std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/task")) {
-    std::ifstream in(t.path() / "stat");
-    const std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    std::istringstream fields(stat.substr(stat.rfind(')') + 2));
-    const std::vector<std::string> f{std::istream_iterator<std::string>(fields), {}};
-    ThreadScheduling s;
-    std::ifstream(t.path() / "comm") >> s.name;
-    if (f.size() > 38) {
-      s.policy = std::stoi(f[38]);
-      s.priority = std::stoi(f[37]);
-    }
-    out.push_back(s);
-  }
-  return out;
-}
-
 TEST_F(SensorNodeAgainstAravisFake, RealtimeSectionCoversAravisAndZeroMQThreadsOrSaysWhyNot) {
   // A sanitizer build refuses lock_memory (its shadow memory is terabytes): priority alone there.
   const bool lock = !TACTILE_SANITIZED;
@@ -202,7 +153,7 @@ TEST_F(SensorNodeAgainstAravisFake, RealtimeSectionCoversAravisAndZeroMQThreadsO
          "left.yaml, reference: zero.pgm, fps: 100}\n";
   const std::vector<std::string> argv{TACTILE_SENSOR_NODE_PATH, "--config",
                                       (dir_ / "sensor.yaml").string()};
-  if (!realtime_allowed(lock)) {
+  if (!testing::realtime_allowed(7, lock)) {
     const auto r = testing::run(argv);
     EXPECT_EQ(r.exit_code, 1) << r.err;
     EXPECT_NE(r.err.find("sensor.yaml: realtime: SCHED_FIFO priority 7 refused"), std::string::npos)
@@ -221,7 +172,7 @@ TEST_F(SensorNodeAgainstAravisFake, RealtimeSectionCoversAravisAndZeroMQThreadsO
                                         : "real-time scheduling: SCHED_FIFO priority 7"),
             std::string::npos)
       << node.err_so_far();
-  const auto threads = thread_scheduling(node.pid());
+  const auto threads = testing::thread_scheduling(node.pid());
   ASSERT_GE(threads.size(), 4U) << "main, pipeline, Aravis's stream thread, ZeroMQ's threads";
   std::string names;
   for (const auto& t : threads) {
