@@ -14,9 +14,8 @@ namespace {
 
 constexpr const char* kHowToGrant =
     "run it as root, give it CAP_SYS_NICE and CAP_IPC_LOCK (setcap cap_sys_nice,cap_ipc_lock+ep, "
-    "or "
-    "cap_add: [SYS_NICE, IPC_LOCK] in docker compose), or raise its rtprio and memlock limits "
-    "(/etc/security/limits.conf); or remove the realtime section";
+    "or cap_add: [SYS_NICE, IPC_LOCK] in docker compose), or raise its rtprio and memlock "
+    "limits (/etc/security/limits.conf); or remove the realtime section";
 
 // AddressSanitizer and ThreadSanitizer map terabytes of shadow memory: mlockall would try to
 // fault all of it in.
