@@ -182,4 +182,9 @@ std::vector<ThreadScheduling> thread_scheduling(pid_t pid) {
   return out;
 }
 
+std::string realtime_log_line(int priority, bool lock) {
+  return "real-time scheduling: SCHED_FIFO priority " + std::to_string(priority) +
+         (lock ? ", memory locked" : "");
+}
+
 }  // namespace tactile::testing

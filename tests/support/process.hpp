@@ -75,4 +75,8 @@ struct ThreadScheduling {
 // Every thread of `pid`, from /proc/PID/task/*/{comm,stat}.
 std::vector<ThreadScheduling> thread_scheduling(pid_t pid);
 
+// The line sensor_node and hand_node log once their realtime section took effect, e.g.
+// "real-time scheduling: SCHED_FIFO priority 7, memory locked".
+std::string realtime_log_line(int priority, bool lock);
+
 }  // namespace tactile::testing

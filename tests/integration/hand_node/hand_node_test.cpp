@@ -593,10 +593,7 @@ TEST(HandNode, RealtimeSectionPutsEveryThreadUnderSchedFifoOrSaysWhyNot) {
   while (hand.err_so_far().find("subscribing to") == std::string::npos &&
          std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(10ms);
-  ASSERT_NE(hand.err_so_far().find(lock ? "real-time scheduling: SCHED_FIFO priority 7, memory "
-                                          "locked"
-                                        : "real-time scheduling: SCHED_FIFO priority 7"),
-            std::string::npos)
+  ASSERT_NE(hand.err_so_far().find(testing::realtime_log_line(7, lock)), std::string::npos)
       << hand.err_so_far();
   const auto threads = testing::thread_scheduling(hand.pid());
   ASSERT_GE(threads.size(), 2U) << "hand_node and ZeroMQ's threads";

@@ -167,10 +167,7 @@ TEST_F(SensorNodeAgainstAravisFake, RealtimeSectionCoversAravisAndZeroMQThreadsO
   // Frames flow: Aravis's stream thread and ZeroMQ's I/O thread are running.
   const Collected c = collect(sub, 20, 20s);
   ASSERT_GE(c.frames.size(), 20U) << node.err_so_far() << fake.output();
-  EXPECT_NE(node.err_so_far().find(lock ? "real-time scheduling: SCHED_FIFO priority 7, memory "
-                                          "locked"
-                                        : "real-time scheduling: SCHED_FIFO priority 7"),
-            std::string::npos)
+  EXPECT_NE(node.err_so_far().find(testing::realtime_log_line(7, lock)), std::string::npos)
       << node.err_so_far();
   const auto threads = testing::thread_scheduling(node.pid());
   ASSERT_GE(threads.size(), 4U) << "main, pipeline, Aravis's stream thread, ZeroMQ's threads";
