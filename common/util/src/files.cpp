@@ -62,4 +62,37 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
   }
 }
 
+void check_writable_dir(const std::filesystem::path& dir) {
+  const std::filesystem::path d = dir.empty() ? std::filesystem::path(".") : dir;
+  std::error_code ec;
+  std::filesystem::create_directories(d, ec);
+  if (ec) throw std::runtime_error(d.string() + ": cannot create directory: " + ec.message());
+  std::string probe = (d / ".write-probe.XXXXXX").string();
+  const int fd = ::mkstemp(probe.data());
+  if (fd < 0) throw std::runtime_error(d.string() + ": cannot write here: " + std::strerror(errno));
+  ::close(fd);
+  ::unlink(probe.c_str());
+}
+
+ReadyFile::ReadyFile(std::filesystem::path path) : path_(std::move(path)) {
+  if (path_.empty()) return;
+  std::error_code ec;
+  std::filesystem::remove(path_, ec);
+  if (ec) throw std::runtime_error(path_.string() + ": cannot remove a stale ready file: " +
+                                   ec.message());
+  check_writable_dir(path_.parent_path());
+}
+
+ReadyFile::~ReadyFile() {
+  if (path_.empty() || !ready_) return;
+  std::error_code ec;
+  std::filesystem::remove(path_, ec);
+}
+
+void ReadyFile::mark_ready() {
+  if (path_.empty() || ready_) return;
+  write_file_atomic(path_, "ready\n");
+  ready_ = true;
+}
+
 }  // namespace tactile::util

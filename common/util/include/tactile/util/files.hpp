@@ -14,4 +14,28 @@ std::string read_file(const std::filesystem::path& path);
 // parent directories. Throws std::runtime_error naming the file on failure.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
 
+// Makes sure files can be written into `dir` later: creates it when missing and creates and
+// removes a probe file in it. For a program that writes its results only at the end of a long
+// run, so that a folder it cannot write is an error at start-up, not a result lost at the end.
+// Throws std::runtime_error naming the folder and the reason.
+void check_writable_dir(const std::filesystem::path& dir);
+
+// A file that exists exactly while a program is ready to serve, for a supervisor's health check
+// (docker/compose.yaml): made empty of meaning at construction (a file left by an earlier run is
+// removed), written by mark_ready(), removed again by the destructor. An empty path does nothing.
+class ReadyFile {
+ public:
+  explicit ReadyFile(std::filesystem::path path);
+  ~ReadyFile();
+  ReadyFile(const ReadyFile&) = delete;
+  ReadyFile& operator=(const ReadyFile&) = delete;
+  // Writes the file once; later calls do nothing. Throws std::runtime_error naming the file.
+  void mark_ready();
+  bool ready() const { return ready_; }
+
+ private:
+  std::filesystem::path path_;
+  bool ready_ = false;
+};
+
 }  // namespace tactile::util
