@@ -8,6 +8,7 @@
 #include "src/pipeline.hpp"
 #include "src/sensor_config.hpp"
 #include "tactile/config/calibration_file.hpp"
+#include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/realtime.hpp"
 #include "tactile/util/stop.hpp"
@@ -26,6 +27,7 @@ int run(int argc, char** argv) {
   std::string reference;
   std::string publish;
   std::string state_dir;
+  std::string ready_path;
   std::string log_level = "info";
   double fps = 0;
   bool raw_frames = false;
@@ -49,6 +51,9 @@ int run(int argc, char** argv) {
   app.add_flag("--raw-frames", raw_frames,
                "also publish every measured camera frame and the reference on raw/<sensor_id> "
                "(docs/recording.md)");
+  app.add_option("--ready-file", ready_path,
+                 "write this file once every camera's frames are measured and published, and "
+                 "remove it on exit (a health check, docker/compose.yaml)");
   app.add_option("--log-level", log_level, "debug, info, warn or error")->capture_default_str();
   try {
     app.parse(argc, argv);
@@ -101,6 +106,7 @@ int run(int argc, char** argv) {
       tactile::util::log_info("real-time scheduling: {}", tactile::util::describe(cfg.realtime));
     tactile::util::install_stop_handlers();
     tactile::wire::install_protobuf_log_handler();
+    tactile::util::ReadyFile ready(ready_path);
     zmq::context_t ctx;
     tactile::sensor::SharedPublisher pub(ctx, cfg.publish, cfg.security ? &*cfg.security : nullptr);
     tactile::util::log_info("publishing on {}{}", pub.endpoint(), cfg.security ? " (CURVE)" : "");
@@ -115,11 +121,24 @@ int run(int argc, char** argv) {
     for (auto& p : pipelines)
       threads.emplace_back([&p, &stop] { p->run(stop); });
     // The threads end on their own only after a fatal error; a signal ends them all.
+    bool announced_ready = false;
     while (!tactile::util::stop_requested()) {
       bool fatal = false;
-      for (const auto& p : pipelines)
+      bool measuring = true;
+      for (const auto& p : pipelines) {
         fatal = fatal || !p->fatal_error().empty();
+        measuring = measuring && p->counters().complete.load() > 0;
+      }
       if (fatal) break;
+      if (measuring && !announced_ready) {
+        announced_ready = true;
+        tactile::util::log_info("every camera is measured and published");
+        try {
+          ready.mark_ready();
+        } catch (const std::exception& e) {
+          tactile::util::log_warn("{}", e.what());  // the health check then fails, visibly
+        }
+      }
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
     stop = true;

@@ -19,6 +19,7 @@
 #include "tactile/util/stop.hpp"
 #include "tactile/util/text.hpp"
 #include "tactile/wire/envelope.hpp"
+#include "tactile/wire/security.hpp"
 
 namespace {
 
@@ -82,6 +83,22 @@ int run(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--full-noise", rt.full_noise,
                "real time: fresh noise on every pixel of every frame, not only the element disks");
+  std::string arm_key;
+  std::vector<std::string> arm_clients;
+  std::string observe_key;
+  std::string ready_path;
+  app.add_option("--ready-file", ready_path,
+                 "real time: write this file once the cameras serve and the arm controller "
+                 "listens, and remove it on exit (a health check, docker/compose.yaml)");
+  app.add_option("--arm-key", arm_key,
+                 "real time: CURVE on the arm link: the arm controller's key pair (NAME.key, "
+                 "docs/security.md)");
+  app.add_option("--arm-client", arm_clients,
+                 "real time: with --arm-key, a client public key (NAME.pub) let in (repeatable; "
+                 "none: any client that knows the arm's public key)")
+      ->allow_extra_args(false);
+  app.add_option("--observe-key", observe_key,
+                 "real time: sensor_node's public key (NAME.pub), for its CURVE-secured frames");
   app.add_option("--write-configs", write_configs,
                  "write left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml for this "
                  "scenario into DIR and exit");
@@ -111,16 +128,40 @@ int run(int argc, char** argv) {
     rt.camera_addresses = {cameras.substr(0, comma), cameras.substr(comma + 1)};
   }
   if (!observe_frames.empty()) rt.observe_frames = observe_frames;
+  if (!arm_key.empty()) {
+    tactile::wire::ServerSecurity sec{tactile::wire::load_key_pair(arm_key), {}};
+    for (const std::string& c : arm_clients)
+      sec.authorized_clients.push_back(tactile::wire::load_public_key(c));
+    rt.arm_security = std::move(sec);
+  } else if (!arm_clients.empty()) {
+    std::fprintf(stderr, "rig: --arm-client needs --arm-key\n");
+    return 2;
+  }
+  if (!observe_key.empty()) {
+    // sensor_node's PUB lets in any client that knows its public key: the rig's own pair is new.
+    rt.observe_security = tactile::wire::ClientSecurity{tactile::wire::generate_keypair(),
+                                                        tactile::wire::load_public_key(observe_key)};
+  }
   if (!write_configs.empty()) {
     tactile::rig::write_node_configs(scenario, write_configs, rt);
     tactile::util::log_info(
         "wrote left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml into {}", write_configs);
     return 0;
   }
+  // The results are written at the end of a run that may last minutes: a folder that cannot take
+  // them is refused now, not found out then.
+  for (const std::string& file : {report_path, series_path, timing_path}) {
+    if (!file.empty()) tactile::util::check_writable_dir(std::filesystem::path(file).parent_path());
+  }
+  for (const std::string& dir : {plots_dir, calibration_dir}) {
+    if (!dir.empty()) tactile::util::check_writable_dir(dir);
+  }
   if (!lockstep) {
     tactile::util::install_stop_handlers();
     tactile::wire::install_protobuf_log_handler();
     rt.record_series = !plots_dir.empty() || !series_path.empty();
+    tactile::util::ReadyFile ready(ready_path);
+    rt.on_ready = [&ready] { ready.mark_ready(); };
     const tactile::rig::RealtimeResult result = tactile::rig::run_realtime(scenario, rt);
     const std::string json = tactile::rig::report_json(result.run.report);
     if (!report_path.empty()) {

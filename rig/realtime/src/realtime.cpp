@@ -164,6 +164,7 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
                    std::vector<std::string>{"event"});
   util::log_info("arm controller on {}, ground truth on {}, deadman {:.0f} ms", arm.endpoint(),
                  truth_pub ? truth_pub->endpoint() : std::string("(none)"), opt.deadman_s * 1e3);
+  if (opt.on_ready) opt.on_ready();
 
   // Reused buffers.
   std::string peer;  // the client the arm answers

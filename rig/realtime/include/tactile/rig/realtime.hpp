@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -44,6 +45,9 @@ struct RealtimeOptions {
   // Fresh noise on every pixel of every frame; otherwise only the element disks (everything
   // sensor_node reads) get fresh noise and the rest of the image keeps its noise (far cheaper).
   bool full_noise = false;
+  // Called once the cameras serve and the arm controller and ground truth are bound (for a
+  // health check: rig --ready-file).
+  std::function<void()> on_ready;
 };
 
 struct RealtimeCounters {
