@@ -34,7 +34,7 @@ struct Bound {
   double y = 0;
 };
 Bound cramer_rao(const SpotSetting& s, double radius, int reference_frames);
-// The bound of notes/limits.md for a Gaussian spot in white noise: sqrt(2/pi) sigma_n / A.
+// The textbook Cramer-Rao bound for a Gaussian spot in white noise: sqrt(2/pi) sigma_n / A.
 double cramer_rao_simple(const SpotSetting& s);
 
 // Accumulates centroid errors against truth and fits, per axis,

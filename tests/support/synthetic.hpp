@@ -64,7 +64,7 @@ class SceneRenderer {
 };
 
 // A calibration with `rows` x `cols` elements on a grid (spacing in pixels, radius in pixels),
-// zero_px at each disk centre and the curves of INTERFACES.md section 1.
+// zero_px at each disk centre and the example curves of docs/calibration.md.
 Calibration grid_calibration(const SceneOptions& o, int cols, int rows, double spacing,
                              double radius);
 

@@ -112,7 +112,7 @@ LayoutResult find_layout(const LayoutInput& input, const LayoutOptions& options,
 // Draws each element's disk (circle) and position (cross) on the preview: the --marks image.
 Image mark_layout(const LayoutResult& result);
 
-// The curves written by `layout` until `fit` replaces them: INTERFACES.md's example curves,
+// The curves written by `layout` until `fit` replaces them: docs/calibration.md's example curves,
 // G scaled to the bit depth.
 PiecewiseLinear placeholder_normal_curve(int bit_depth);
 PiecewiseLinear placeholder_shear_curve();

@@ -1,4 +1,4 @@
-// tactile_extract: the measurement core as a command (INTERFACES.md section 2).
+// tactile_extract: the measurement core as a command (docs/calibration.md, "tactile_extract").
 //
 // Reads a calibration, a no-load reference (the mean of one or more PGM frames) and a sequence
 // of PGM frames; prints one JSON object per frame on standard output.

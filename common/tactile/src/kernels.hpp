@@ -33,7 +33,7 @@ struct FrameRef {
 // each row: at most two cache lines of a block up to 64 bytes wide). A hint only: it reads
 // nothing and cannot fault. The measurement issues it for the next element while it works on the
 // Gaussian step of the current one, which reads little memory; issued before a pass over pixels
-// it competes with that pass's own loads and costs time (docs/benchmarks.md).
+// it competes with that pass's own loads and costs time (docs/findings.md, extraction 2).
 template <typename Pixel>
 inline void prefetch_block(const Block& b, const FrameRef& f) noexcept {
   const auto* row = reinterpret_cast<const std::uint8_t*>(f.pixel<Pixel>(b.x0, b.y0));

@@ -63,7 +63,7 @@ Calibration make_calibration(const std::string& sensor_id, const CameraParams& c
   cal.noise_floor = scale * std::max(opt.noise_floor_min, opt.noise_floor_sigmas * bg_sigma);
   // The contact thresholds hold for read noise of 2 gray levels and grow in proportion to the
   // noise beyond it: the dimmest spot in contact then keeps its peak-to-noise ratio, and with it
-  // the centroid's noise and the rate of false slips (notes/limits.md: sigma_x ~ sigma_n / A).
+  // the centroid's noise and the rate of false slips (the Cramer-Rao bound: sigma_x ~ sigma_n / A).
   const double noise_scale = std::max(1.0, bg_sigma / 2.0);
   cal.contact_on = scale * opt.contact_on * noise_scale;
   cal.contact_off = scale * opt.contact_off * noise_scale;

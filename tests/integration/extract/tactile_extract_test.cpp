@@ -1,4 +1,4 @@
-// tactile_extract as a user runs it (INTERFACES.md section 2): the real program, real files.
+// tactile_extract as a user runs it (docs/calibration.md): the real program, real files.
 #include <gtest/gtest.h>
 
 #include <cmath>

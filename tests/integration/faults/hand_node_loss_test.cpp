@@ -94,7 +94,7 @@ TEST(HandNodeUnderLoss, SkipsAndCountsEveryIncompleteFrame) {
   KnownCamera left(images, "127.0.0.2", "HAND-L", 0.0);
   KnownCamera right(images, "127.0.0.3", "HAND-R", 0.0);
   // One sensor_node per camera: opening two cameras at once in one sensor_node corrupts Aravis
-  // (its device creation is not thread-safe; see docs/reliability.md).
+  // (its device creation is not thread-safe; see docs/findings.md, reliability 2).
   const std::string endpoints[2] = {"ipc://" + (dir / "left-frames").string(),
                                     "ipc://" + (dir / "right-frames").string()};
   const auto left_config =

@@ -1,6 +1,6 @@
-// The per-frame path allocates nothing (STYLE.md rule 4): wait_frame, release_frame and
-// counters of a started camera. Counts operator new on the calling thread; Aravis's own
-// threads and GLib's allocator are outside what this proves.
+// The per-frame path allocates nothing (docs/architecture.md, rule 4): wait_frame,
+// release_frame and counters of a started camera. Counts operator new on the calling thread;
+// Aravis's own threads and GLib's allocator are outside what this proves.
 #include <gtest/gtest.h>
 #include <unistd.h>
 

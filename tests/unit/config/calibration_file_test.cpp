@@ -1,4 +1,4 @@
-// Every rule of the calibration file (INTERFACES.md section 1): a file that breaks one is
+// Every rule of the calibration file (docs/calibration.md): a file that breaks one is
 // refused with a message naming the file, the key and, where there is one, the element.
 #include "tactile/config/calibration_file.hpp"
 

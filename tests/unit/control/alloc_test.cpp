@@ -1,5 +1,5 @@
-// update() allocates nothing (STYLE.md rule 4), over the paper's whole experiment with stale
-// stretches, OVER and re-compressions.
+// update() allocates nothing (docs/architecture.md, rule 4), over the paper's whole experiment
+// with stale stretches, OVER and re-compressions.
 #include <gtest/gtest.h>
 
 #include <vector>

@@ -1,4 +1,4 @@
-// The per-step and per-frame paths of the rig allocate nothing (STYLE.md rule 4).
+// The per-step and per-frame paths of the rig allocate nothing (docs/architecture.md, rule 4).
 #include <gtest/gtest.h>
 
 #include <vector>

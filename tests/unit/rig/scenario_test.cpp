@@ -1,4 +1,4 @@
-// Scenario files (INTERFACES.md section 3, docs/rig.md): the bundled ones load, and every bad
+// Scenario files (docs/rig.md, "Scenario files"): the bundled ones load, and every bad
 // file is refused with a message naming file, line, key and value.
 #include "tactile/rig/scenario.hpp"
 

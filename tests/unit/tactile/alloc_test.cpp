@@ -1,4 +1,4 @@
-// The per-frame path allocates nothing (STYLE.md rule 4).
+// The per-frame path allocates nothing (docs/architecture.md, rule 4).
 #include <gtest/gtest.h>
 
 #include <algorithm>

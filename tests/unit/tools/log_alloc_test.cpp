@@ -1,5 +1,5 @@
 // The per-message paths of tactile_record and tactile_live allocate nothing once their buffers
-// have grown (STYLE.md 4).
+// have grown (docs/architecture.md, rule 4).
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"

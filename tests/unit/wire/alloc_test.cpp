@@ -1,5 +1,5 @@
 // The per-frame wire paths allocate nothing once warm: sensor_node's fill + encode, hand_node's
-// decode + read (STYLE.md rule 4). ZeroMQ's own message buffers are outside our code.
+// decode + read (docs/architecture.md, rule 4). ZeroMQ's own message buffers are outside our code.
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"

@@ -25,7 +25,7 @@ struct ElementCalibration {
   Vec3 normal{0, 0, 1};  // unit inward normal in the fingertip frame
 };
 
-// One sensor's calibration: INTERFACES.md section 1, docs/calibration.md.
+// One sensor's calibration: docs/calibration.md, "The calibration file".
 struct Calibration {
   std::string sensor_id;
   int width = 0;
@@ -54,8 +54,8 @@ class CalibrationError : public std::runtime_error {
   std::optional<std::uint32_t> element_id_;
 };
 
-// Checks every rule of INTERFACES.md section 1 that does not concern the file's syntax; throws
-// CalibrationError for the first rule broken.
+// Checks every rule of docs/calibration.md ("Rules") that does not concern the file's syntax;
+// throws CalibrationError for the first rule broken.
 void validate(const Calibration& cal);
 
 // Number of pixels whose centres lie in the disk (the size of S).

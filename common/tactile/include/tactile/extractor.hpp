@@ -23,7 +23,8 @@ struct BlockData;
 enum class CentroidEstimator : std::uint8_t {
   // Eqs. 3 and 4 with w = max(dg, 0): the paper's form, no noise floor.
   kPlain,
-  // Eqs. 3 and 4 with w = max(dg - noise_floor, 0): the reference estimator of DESIGN.md.
+  // Eqs. 3 and 4 with w = max(dg - noise_floor, 0): the reference estimator
+  // (docs/calibration.md, "Centroid estimators").
   kThresholded,
   // The thresholded centroid, recomputed inside a soft-edged window centred on the first
   // estimate and sized to the spot, so noise far from the spot no longer pulls the estimate
@@ -98,9 +99,9 @@ struct ReferenceResult {
   double value = 0;              // its excess, in G units (gray levels)
 };
 
-// The measurement core: image -> per-element readings (DESIGN.md section 3).
-// Construction validates the calibration and allocates everything; measure() allocates
-// nothing, never throws and never yields NaN or infinity.
+// The measurement core: image -> per-element readings (docs/calibration.md, "The measurement
+// of one frame"). Construction validates the calibration and allocates everything; measure()
+// allocates nothing, never throws and never yields NaN or infinity.
 class Extractor {
  public:
   explicit Extractor(Calibration cal, ExtractorOptions options = {});

@@ -4,7 +4,7 @@
 
 namespace tactile {
 
-// What the measurement found for one sensing element in one frame (DESIGN.md section 3).
+// What the measurement found for one sensing element in one frame (docs/calibration.md).
 // Out of contact: contact is false, G is still the measured value, and the centroid,
 // displacements and forces are all 0.
 struct ElementReading {

@@ -8,7 +8,7 @@
 
 namespace tactile::config {
 
-// Reads a calibration file (INTERFACES.md section 1) and checks every rule; a broken rule
+// Reads a calibration file (docs/calibration.md) and checks every rule; a broken rule
 // throws ConfigError naming the file, line, key and element. Unknown keys are tolerated (the
 // format grows by adding keys) and listed in `warnings` when given.
 Calibration parse_calibration(const std::string& text, const std::string& source,

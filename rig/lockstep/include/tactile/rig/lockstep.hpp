@@ -1,9 +1,9 @@
 #pragma once
 
-// The lockstep runner (docs/rig.md, "Lockstep"): the scenario in one process on simulated time,
-// with the world physics, the optics rendering real images, the real measurement core
-// (tactile::Extractor) and the real control core (tactile::control) in the loop. Deterministic
-// for a seed: no clock is read.
+// The lockstep runner (docs/rig.md, "Lockstep runner and report"): the scenario in one process
+// on simulated time, with the world physics, the optics rendering real images, the real
+// measurement core (tactile::Extractor) and the real control core (tactile::control) in the
+// loop. Deterministic for a seed: no clock is read.
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -71,7 +71,7 @@ class SlipScorer {
   std::uint64_t ideal_fn_ = 0;
 };
 
-// The scenario report: INTERFACES.md section 4, plus a few keys of our own (docs/rig.md).
+// The scenario report: the fixed keys plus a few of our own (docs/rig.md).
 struct Report {
   bool completed = false;
   bool dropped = false;
@@ -193,7 +193,7 @@ std::string series_csv(const RunSeries& series);
 // The mismatches as CSV.
 std::string mismatches_csv(const RunSeries& series);
 
-// The report as one JSON object (keys of INTERFACES.md section 4 first; latency_ms is null in
+// The report as one JSON object (the fixed keys first; latency_ms is null in
 // lockstep). Deterministic text: the same report gives the same bytes.
 std::string report_json(const Report& report);
 

@@ -55,8 +55,8 @@ double level_scale(int bit_depth);
 
 // The calibration of the simulated sensor (tactile-calibration/1): 41 element disks in rings
 // of 1, 8, 16, 16 around the image centre (element k of `normals` in ring order, its azimuth
-// from its normal), zero_px at each disk centre, the curves of INTERFACES.md section 1 (G scaled
-// to the bit depth), and each element's inward normal.
+// from its normal), zero_px at each disk centre, the example curves of docs/calibration.md (G
+// scaled to the bit depth), and each element's inward normal.
 Calibration make_calibration(const std::string& sensor_id, const CameraParams& cam,
                              const SensorOpticsParams& opt, std::span<const Vec3> normals);
 

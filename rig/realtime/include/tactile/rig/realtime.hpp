@@ -1,9 +1,10 @@
 #pragma once
 
-// The rig in real time (docs/rig.md, "Real time"): the world and optics of the lockstep runner,
-// but the fingertip cameras are GigE Vision cameras (Aravis's fake camera, fed with the rendered
-// images), the arm is commanded over the arm link (ROUTER, with a deadman), and ground truth is
-// published. sensor_node and hand_node run as separate programs against it, unchanged.
+// The rig in real time (docs/system.md, "The rig in real time"): the world and optics of the
+// lockstep runner, but the fingertip cameras are GigE Vision cameras (Aravis's fake camera, fed
+// with the rendered images), the arm is commanded over the arm link (ROUTER, with a deadman),
+// and ground truth is published. sensor_node and hand_node run as separate programs against it,
+// unchanged.
 #include <array>
 #include <cstdint>
 #include <filesystem>

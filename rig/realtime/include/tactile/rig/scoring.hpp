@@ -1,7 +1,8 @@
 #pragma once
 
 // Scores a run against its ground truth, element-frame by element-frame, and tallies the
-// decisions hand_node announced: the report of INTERFACES.md section 4 (docs/rig.md, "Report").
+// decisions hand_node announced: the scenario report (docs/rig.md, "Lockstep runner and
+// report").
 // Used by the real-time rig, where measured frames and events arrive over the wire.
 #include <array>
 #include <cstdint>

@@ -1,6 +1,6 @@
 #pragma once
 
-// Scenario files for the rig (INTERFACES.md section 3; every key and default in docs/rig.md).
+// Scenario files for the rig (a fixed interface; every key and default in docs/rig.md).
 #include <cstdint>
 #include <filesystem>
 #include <string>
