@@ -184,8 +184,8 @@ int main(int argc, char** argv) {
                  "centroid estimator: plain, thresholded, windowed or gaussian")
       ->capture_default_str();
   app.add_option("--format", opt.format,
-                 "json: one JSON object per frame (INTERFACES.md); table: a readable table of the "
-                 "elements in contact")
+                 "json: one JSON object per frame (docs/calibration.md, tactile_extract); table: a "
+                 "readable table of the elements in contact")
       ->check(CLI::IsMember({"json", "table"}))
       ->capture_default_str();
   app.add_flag("--no-reference-check", opt.no_reference_check,
