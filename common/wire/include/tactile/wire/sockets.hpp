@@ -22,6 +22,12 @@ namespace tactile::wire {
 unsigned poll_readable(std::span<zmq::socket_ref> sockets, std::chrono::milliseconds timeout,
                        int wake_fd = -1);
 
+// Takes one queued [first, second] message without waiting, into the caller's messages (reused
+// from call to call). False when nothing is queued, and when the message has another shape: then
+// all its parts are dropped and counted in `malformed`. Never throws for a message's shape.
+bool receive_pair(zmq::socket_ref socket, zmq::message_t& first, zmq::message_t& second,
+                  std::uint64_t& malformed);
+
 // PUB side of a tactile, event or ground-truth stream.
 class Publisher {
  public:
