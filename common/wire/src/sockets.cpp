@@ -55,8 +55,8 @@ void drain(zmq::socket_ref s) {
 }
 
 void copy_to(const zmq::message_t& m, std::vector<std::uint8_t>& out) {
-  const auto* p = static_cast<const std::uint8_t*>(m.data());
-  out.assign(p, p + m.size());
+  const std::span<const std::uint8_t> bytes = bytes_of(m);
+  out.assign(bytes.begin(), bytes.end());
 }
 
 }  // namespace
