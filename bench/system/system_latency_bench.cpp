@@ -624,9 +624,9 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
   r.subscriber_idle = idle.active();
   zmq::context_t ctx;
   // Everything the programs publish that the stages need; the rig's truth for slip onsets.
-  wire::Subscriber sub(ctx,
-                       {"tcp://127.0.0.1:5555", "tcp://127.0.0.1:5557", "tcp://127.0.0.1:5558"},
-                       {"frame/", "truth", "event", "command"});
+  wire::Subscriber sub(
+      ctx, {"tcp://127.0.0.1:5555", "tcp://127.0.0.1:5557", "tcp://127.0.0.1:5558"},
+      {wire::kFrameTopicPrefix, wire::kTruthTopic, wire::kEventTopic, wire::kCommandTopic});
   std::vector<Captured> cap;
   cap.reserve(static_cast<std::size_t>(fps * 4 * (s.seconds + s.warmup_s + 30)));
 
@@ -663,7 +663,7 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
   capture_until(sub, cap, util::monotonic_ns() + static_cast<std::int64_t>(s.start_timeout_s * 1e9),
                 children, [&] {
                   for (; seen < cap.size(); ++seen) {
-                    if (cap[seen].topic == "command") started = true;
+                    if (cap[seen].topic == wire::kCommandTopic) started = true;
                   }
                   return started;
                 });
@@ -1093,7 +1093,7 @@ int zmq_echo(const std::string& pub_endpoint, const std::string& router_endpoint
   util::apply_realtime_scheduling({realtime_priority, false}, "zmq-echo");
   util::install_stop_handlers();
   zmq::context_t ctx;
-  wire::Subscriber sub(ctx, {pub_endpoint}, {"frame/"});
+  wire::Subscriber sub(ctx, {pub_endpoint}, {wire::kFrameTopicPrefix});
   wire::Dealer dealer(ctx, router_endpoint);
   std::vector<std::uint8_t> reply(std::max<std::size_t>(reply_bytes, 24));
   // Announce ourselves so the ROUTER knows the peer.
@@ -1145,6 +1145,7 @@ ZmqResult run_zmq(const Settings& s, double fps, std::size_t frame_bytes, std::s
                                tail_of(dir / "logs" / "zmq-echo.log"));
   }
   std::vector<std::uint8_t> msg(r.frame_bytes, 0x5a);
+  const std::array<std::string, 2> topics{wire::frame_topic("left"), wire::frame_topic("right")};
   const auto period_ns = static_cast<std::int64_t>(1e9 / fps);
   const std::int64_t warmup_ns = 1'000'000'000;
   const auto measure_ns = static_cast<std::int64_t>(s.transport_seconds * 1e9);
@@ -1160,7 +1161,7 @@ ZmqResult run_zmq(const Settings& s, double fps, std::size_t frame_bytes, std::s
     const std::int64_t now = util::monotonic_ns();
     if (now >= next && now < begin + warmup_ns + measure_ns) {
       // Two sensors: two frames each period, as sensor_node publishes them.
-      for (const char* topic : {"frame/left", "frame/right"}) {
+      for (const std::string& topic : topics) {
         const std::int64_t t = util::realtime_ns();
         ++seq;
         std::memcpy(msg.data(), &t, 8);

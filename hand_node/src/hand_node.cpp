@@ -11,10 +11,6 @@
 namespace tactile::hand {
 namespace {
 
-std::span<const std::uint8_t> bytes(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
 std::int64_t seconds_to_ns(double s) {
   return static_cast<std::int64_t>(s * 1e9);
 }
@@ -24,7 +20,7 @@ std::int64_t seconds_to_ns(double s) {
 HandNode::HandNode(HandConfig cfg, zmq::context_t& ctx)
     : cfg_(std::move(cfg)),
       ids_{cfg_.fingertips[0].sensor_id, cfg_.fingertips[1].sensor_id},
-      sub_(ctx, cfg_.subscribe, {"frame/" + ids_[0], "frame/" + ids_[1]},
+      sub_(ctx, cfg_.subscribe, {wire::frame_topic(ids_[0]), wire::frame_topic(ids_[1])},
            cfg_.sensor_security ? &*cfg_.sensor_security : nullptr),
       arm_(ctx, cfg_.arm, cfg_.arm_security ? &*cfg_.arm_security : nullptr),
       controller_(cfg_.controller),
@@ -48,7 +44,7 @@ wire::Answers HandNode::answers() const {
 
 void HandNode::send_envelope() {
   wire::encode(out_, out_bytes_);
-  if (arm_.send(bytes(out_bytes_))) {
+  if (arm_.send(wire::bytes_of(out_bytes_))) {
     last_sent_ns_ = util::monotonic_ns();
   } else {
     ++counters_.commands_blocked;
@@ -81,7 +77,7 @@ void HandNode::send_command(const control::Command& c, std::int64_t now_ns, bool
     r.set_receive_timestamp_ns(r.sensor_id() == ids_[0] ? received_ns_[0] : received_ns_[1]);
   send_envelope();
   // A copy beside the events, as for ArmStates (the arm link itself is point to point).
-  if (events_) events_->send("command", bytes(out_bytes_));
+  if (events_) events_->send(wire::kCommandTopic, wire::bytes_of(out_bytes_));
   ++counters_.commands;
 }
 
@@ -163,7 +159,7 @@ void HandNode::on_arm_message() {
     ++counters_.arm_states;
     have_arm_ = true;
     // Beside the events, for recordings and plots (the arm link itself is point to point).
-    if (events_) events_->send("arm", arm_buf_);
+    if (events_) events_->send(wire::kArmTopic, arm_buf_);
     if (arm_state_.deadman && !deadman_seen_) {
       deadman_seen_ = true;
       // The arm held because it heard nothing from us for a while (we were not scheduled, or
@@ -241,7 +237,7 @@ void HandNode::step(std::int64_t now_ns, FramePairing::Fresh fresh) {
     if (events_) {
       wire::fill_event(e, util::realtime_ns(), answers(), ids_, *event_env_.mutable_event());
       wire::encode(event_env_, out_bytes_);
-      events_->send("event", bytes(out_bytes_));
+      events_->send(wire::kEventTopic, wire::bytes_of(out_bytes_));
     }
   }
 }

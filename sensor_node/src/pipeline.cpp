@@ -14,10 +14,6 @@
 namespace tactile::sensor {
 namespace {
 
-std::span<const std::uint8_t> bytes_of(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
 v1::FrameStatus to_wire(camera::FrameStatus s) {
   // The camera seam numbers its statuses as the wire does (a camera test holds them equal).
   return static_cast<v1::FrameStatus>(static_cast<int>(s));
@@ -46,9 +42,9 @@ Pipeline::Pipeline(CameraConfig cfg, const ExtractorOptions& measurement, double
       pub_(pub),
       stats_period_s_(stats_period_s),
       raw_frames_(raw_frames),
-      raw_topic_(std::string(wire::kRawTopicPrefix) + cfg_.sensor_id),
-      topic_("frame/" + cfg_.sensor_id),
-      stats_topic_("stats/" + cfg_.sensor_id) {}
+      raw_topic_(wire::raw_topic(cfg_.sensor_id)),
+      topic_(wire::frame_topic(cfg_.sensor_id)),
+      stats_topic_(wire::stats_topic(cfg_.sensor_id)) {}
 
 void Pipeline::wait(double seconds, const std::atomic<bool>& stop) const {
   const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
@@ -127,7 +123,7 @@ void Pipeline::publish(const camera::Frame& frame, v1::FrameStatus status, doubl
   wire::fill_tactile_frame(cfg_.sensor_id, h, extractor_.readings(), cfg_.calibration.mm_per_px,
                            *env_.mutable_tactile_frame());
   wire::encode(env_, bytes_);
-  pub_.send(topic_, bytes_of(bytes_));
+  pub_.send(topic_, wire::bytes_of(bytes_));
   ++counters_.published;
   if (frame.receive_timestamp_ns > 0) {
     publish_times_.add(static_cast<double>(util::realtime_ns() - frame.receive_timestamp_ns) *
@@ -168,7 +164,7 @@ void Pipeline::publish_reference() {
   wire::fill_raw_pixels(extractor_.reference_image().view(), raw_);
   wire::fill_settings(extractor_.options(), *raw_.mutable_settings());
   raw_.SerializeToString(&raw_bytes_);
-  pub_.send(raw_topic_, bytes_of(raw_bytes_));
+  pub_.send(raw_topic_, wire::bytes_of(raw_bytes_));
 }
 
 void Pipeline::publish_raw(const camera::Frame& frame, std::uint64_t tactile_sequence,
@@ -184,7 +180,7 @@ void Pipeline::publish_raw(const camera::Frame& frame, std::uint64_t tactile_seq
   raw_.set_forget_previous(forgot);
   wire::fill_raw_pixels(frame.image, raw_);
   raw_.SerializeToString(&raw_bytes_);
-  pub_.send(raw_topic_, bytes_of(raw_bytes_));
+  pub_.send(raw_topic_, wire::bytes_of(raw_bytes_));
 }
 
 void Pipeline::publish_stats() {
@@ -205,7 +201,7 @@ void Pipeline::publish_stats() {
   s.set_publish_us_max(pmax);
   s.set_camera_restarts(counters_.camera_restarts);
   wire::encode(stats_env_, bytes_);
-  pub_.send(stats_topic_, bytes_of(bytes_));
+  pub_.send(stats_topic_, wire::bytes_of(bytes_));
   publish_reference();  // again now and then: a recorder that joins late still gets it
   util::log_debug(
       "{}: frames {} complete {} incomplete {} lost {} underruns {}; measure p50 {:.1f} us max "

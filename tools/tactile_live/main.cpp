@@ -17,6 +17,8 @@
 #include "tactile/util/clock.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
+#include "tactile/wire/envelope.hpp"
+#include "tactile/wire/sockets.hpp"
 
 namespace {
 
@@ -73,7 +75,8 @@ int run(const Options& opt) {
   for (const auto& c : opt.curve)
     so.curve.push_back(tactile::recording::parse_curve_source(c));
   so.client_key = opt.client_key;
-  so.topics = {"frame/", "stats/", "event"};
+  so.topics = {tactile::wire::kFrameTopicPrefix, tactile::wire::kStatsTopicPrefix,
+               tactile::wire::kEventTopic};
   so.max_message_bytes = std::int64_t{4} << 20;
   so.receive_hwm = 10000;
   tactile::util::install_stop_handlers();
@@ -137,8 +140,7 @@ int run(const Options& opt) {
     if (sources.receive(m, wait)) {
       const std::string_view topic(static_cast<const char*>(m.topic.data()), m.topic.size());
       const int ev =
-          model.add(topic, {static_cast<const std::uint8_t*>(m.payload.data()), m.payload.size()},
-                    tactile::util::monotonic_ns());
+          model.add(topic, tactile::wire::bytes_of(m.payload), tactile::util::monotonic_ns());
       if (ev >= 0 && !screen) {
         ok = write_all(
             "event " +

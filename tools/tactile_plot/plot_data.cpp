@@ -83,8 +83,7 @@ std::string PlotData::position_source_text() const {
 void PlotData::add(const v1::LogRecord& record) {
   if (!first_ns_) first_ns_ = record.receive_time_ns();
   if (record.kind() != v1::PAYLOAD_KIND_ENVELOPE) return;
-  const auto* p = reinterpret_cast<const std::uint8_t*>(record.payload().data());
-  if (wire::decode({p, record.payload().size()}, envelope_) != wire::DecodeStatus::kOk) return;
+  if (wire::decode(wire::bytes_of(record.payload()), envelope_) != wire::DecodeStatus::kOk) return;
   const double t = static_cast<double>(record.receive_time_ns() - *first_ns_) * 1e-9;
   switch (envelope_.body_case()) {
     case v1::Envelope::kTactileFrame:

@@ -17,7 +17,7 @@
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
 #include "tactile/wire/envelope.hpp"
-#include "tactile/wire/raw_frame.hpp"
+#include "tactile/wire/sockets.hpp"
 
 namespace {
 
@@ -34,7 +34,10 @@ struct Options {
   std::string output;
   // Everything but raw frames: sensors, hand_node (events, the ArmStates it received, the
   // ArmCommands it sent) and the rig's truth.
-  std::vector<std::string> topics{"frame/", "stats/", "event", "arm", "command", "truth"};
+  std::vector<std::string> topics{
+      tactile::wire::kFrameTopicPrefix, tactile::wire::kStatsTopicPrefix,
+      tactile::wire::kEventTopic,       tactile::wire::kArmTopic,
+      tactile::wire::kCommandTopic,     tactile::wire::kTruthTopic};
   bool raw_frames = false;
   double duration_s = 0;
   std::uint64_t count = 0;
@@ -55,9 +58,8 @@ class TopicCounts {
   void add(std::string_view topic, const zmq::message_t& payload) {
     Entry* e = find(topic);
     ++e->count;
-    if (topic.starts_with("frame/")) {
-      const auto* data = static_cast<const std::uint8_t*>(payload.data());
-      if (decoder_.decode({data, payload.size()}) == tactile::wire::DecodeStatus::kOk &&
+    if (topic.starts_with(tactile::wire::kFrameTopicPrefix)) {
+      if (decoder_.decode(tactile::wire::bytes_of(payload)) == tactile::wire::DecodeStatus::kOk &&
           decoder_.envelope().has_tactile_frame()) {
         const std::uint64_t seq = decoder_.envelope().tactile_frame().sequence();
         if (e->has_sequence && seq > e->last_sequence + 1) e->lost += seq - e->last_sequence - 1;
@@ -186,7 +188,7 @@ int run(Options opt) {
                             : tactile::v1::PAYLOAD_KIND_ENVELOPE;
       const WriteStatus s =
           writer.append(tactile::util::realtime_ns(), topic, sources.endpoint(m.source), kind,
-                        {static_cast<const std::uint8_t*>(m.payload.data()), m.payload.size()});
+                        tactile::wire::bytes_of(m.payload));
       if (s != WriteStatus::kOk) {
         code = 1;
         break;

@@ -15,6 +15,7 @@
 #include "tactile/util/clock.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
+#include "tactile/wire/envelope.hpp"
 #include "tactile/wire/security.hpp"
 
 namespace {
@@ -257,8 +258,7 @@ int play(const Options& opt) {
         break;
       }
     }
-    const auto* p = reinterpret_cast<const std::uint8_t*>(rec.payload().data());
-    if (player.send(rec.topic(), {p, rec.payload().size()}) ==
+    if (player.send(rec.topic(), tactile::wire::bytes_of(rec.payload())) ==
         tactile::replay::SendStatus::kStopped) {
       stopped = true;
       break;

@@ -1,7 +1,9 @@
 #include "player.hpp"
 
 #include <algorithm>
+#include <array>
 #include <stdexcept>
+#include <zmq_addon.hpp>
 
 #include "tactile/util/clock.hpp"
 #include "tactile/util/stop.hpp"
@@ -64,11 +66,10 @@ SendStatus Player::wait_until(std::int64_t deadline_ns) {
 
 SendStatus Player::send(std::string_view topic, std::span<const std::uint8_t> payload) {
   // The two parts go out together: once the first is accepted the second always is.
+  const std::array<zmq::const_buffer, 2> parts{zmq::buffer(topic.data(), topic.size()),
+                                               zmq::buffer(payload.data(), payload.size())};
   for (;;) {
-    if (socket_.send(zmq::buffer(topic.data(), topic.size()),
-                     zmq::send_flags::sndmore | zmq::send_flags::dontwait)) {
-      break;
-    }
+    if (zmq::send_multipart(socket_, parts, zmq::send_flags::dontwait)) return SendStatus::kOk;
     if (util::stop_requested()) return SendStatus::kStopped;
     zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLOUT, 0};
     try {
@@ -78,8 +79,6 @@ SendStatus Player::send(std::string_view topic, std::span<const std::uint8_t> pa
     }
     read_subscriptions(std::chrono::milliseconds(0));
   }
-  socket_.send(zmq::buffer(payload.data(), payload.size()), zmq::send_flags::none);
-  return SendStatus::kOk;
 }
 
 }  // namespace tactile::replay

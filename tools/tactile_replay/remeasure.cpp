@@ -108,13 +108,12 @@ Remeasurer::Sensor* Remeasurer::sensor(const std::string& id) {
 }
 
 void Remeasurer::add(const v1::LogRecord& record) {
-  const auto* data = reinterpret_cast<const std::uint8_t*>(record.payload().data());
   if (record.kind() == v1::PAYLOAD_KIND_RAW_FRAME) {
     if (raw_.ParseFromString(record.payload())) on_raw(raw_);
     return;
   }
   if (record.kind() != v1::PAYLOAD_KIND_ENVELOPE) return;
-  if (wire::decode({data, record.payload().size()}, envelope_) != wire::DecodeStatus::kOk) return;
+  if (wire::decode(wire::bytes_of(record.payload()), envelope_) != wire::DecodeStatus::kOk) return;
   if (envelope_.has_tactile_frame()) on_frame(envelope_.tactile_frame());
 }
 

@@ -41,6 +41,18 @@ void protobuf_log(google::protobuf::LogLevel level, const char* file, int line,
 
 }  // namespace
 
+std::string frame_topic(std::string_view sensor_id) {
+  return std::string(kFrameTopicPrefix).append(sensor_id);
+}
+
+std::string stats_topic(std::string_view sensor_id) {
+  return std::string(kStatsTopicPrefix).append(sensor_id);
+}
+
+std::string raw_topic(std::string_view sensor_id) {
+  return std::string(kRawTopicPrefix).append(sensor_id);
+}
+
 void install_protobuf_log_handler() {
   google::protobuf::SetLogHandler(&protobuf_log);
 }

@@ -5,8 +5,11 @@
 #include <algorithm>
 #include <array>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
+#include <zmq_addon.hpp>
 
 #include "tactile/util/files.hpp"
 
@@ -155,12 +158,10 @@ void CurveAuthenticator::serve() {
       return;  // the context is closing
     }
     std::vector<zmq::message_t> parts;
-    do {
-      zmq::message_t m;
-      if (!socket_.recv(m, zmq::recv_flags::dontwait)) break;
-      parts.push_back(std::move(m));
-    } while (parts.back().more());
-    if (parts.size() < 6) continue;
+    if (!zmq::recv_multipart(socket_, std::back_inserter(parts), zmq::recv_flags::dontwait) ||
+        parts.size() < 6) {
+      continue;
+    }
     const std::string version = parts[0].to_string();
     const std::string request_id = parts[1].to_string();
     const std::string mechanism = parts[5].to_string();
@@ -172,12 +173,11 @@ void CurveAuthenticator::serve() {
     (ok ? accepted_ : refused_)++;
     const std::string code = ok ? "200" : "400";
     const std::string text = ok ? "OK" : "client key not authorized";
-    socket_.send(zmq::buffer(version), zmq::send_flags::sndmore);
-    socket_.send(zmq::buffer(request_id), zmq::send_flags::sndmore);
-    socket_.send(zmq::buffer(code), zmq::send_flags::sndmore);
-    socket_.send(zmq::buffer(text), zmq::send_flags::sndmore);
-    socket_.send(zmq::str_buffer(""), zmq::send_flags::sndmore);
-    socket_.send(zmq::str_buffer(""), zmq::send_flags::none);
+    // ZAP reply: version, request id, status code, status text, user id, metadata.
+    const std::array<zmq::const_buffer, 6> reply{zmq::buffer(version), zmq::buffer(request_id),
+                                                 zmq::buffer(code),    zmq::buffer(text),
+                                                 zmq::str_buffer(""),  zmq::str_buffer("")};
+    (void)zmq::send_multipart(socket_, reply);
   }
 }
 

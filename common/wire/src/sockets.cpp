@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <stdexcept>
+#include <zmq_addon.hpp>
 
 #include "tactile/wire/envelope.hpp"
 
@@ -46,7 +47,7 @@ bool wait_readable(zmq::socket_t& s, std::chrono::milliseconds timeout) {
 }
 
 // Receives the remaining parts of a multipart message and throws them away.
-void drain(zmq::socket_t& s) {
+void drain(zmq::socket_ref s) {
   zmq::message_t part;
   while (s.get(zmq::sockopt::rcvmore)) {
     if (!s.recv(part, zmq::recv_flags::dontwait)) break;
@@ -54,11 +55,31 @@ void drain(zmq::socket_t& s) {
 }
 
 void copy_to(const zmq::message_t& m, std::vector<std::uint8_t>& out) {
-  const auto* p = static_cast<const std::uint8_t*>(m.data());
-  out.assign(p, p + m.size());
+  const std::span<const std::uint8_t> bytes = bytes_of(m);
+  out.assign(bytes.begin(), bytes.end());
 }
 
 }  // namespace
+
+// Not zmq::recv_multipart: it takes any number of parts through an output iterator (a
+// back_inserter into a vector allocates per message), and recv_multipart_n throws on an extra
+// part and leaves the rest queued. Here a message of another shape is dropped whole and counted.
+bool receive_pair(zmq::socket_ref socket, zmq::message_t& first, zmq::message_t& second,
+                  std::uint64_t& malformed) {
+  if (!socket.recv(first, zmq::recv_flags::dontwait)) return false;
+  if (!first.more()) {
+    ++malformed;
+    return false;
+  }
+  // ZeroMQ delivers a message's parts together: the second is there once the first is.
+  if (!socket.recv(second, zmq::recv_flags::dontwait)) return false;
+  if (second.more()) {
+    drain(socket);
+    ++malformed;
+    return false;
+  }
+  return true;
+}
 
 unsigned poll_readable(std::span<zmq::socket_ref> sockets, std::chrono::milliseconds timeout,
                        int wake_fd) {
@@ -95,9 +116,9 @@ Publisher::Publisher(zmq::context_t& ctx, const std::string& endpoint,
 }
 
 void Publisher::send(std::string_view topic, std::span<const std::uint8_t> payload) {
-  socket_.send(zmq::buffer(topic.data(), topic.size()),
-               zmq::send_flags::sndmore | zmq::send_flags::dontwait);
-  socket_.send(zmq::buffer(payload.data(), payload.size()), zmq::send_flags::dontwait);
+  const std::array<zmq::const_buffer, 2> parts{zmq::buffer(topic.data(), topic.size()),
+                                               zmq::buffer(payload.data(), payload.size())};
+  (void)zmq::send_multipart(socket_, parts, zmq::send_flags::dontwait);
 }
 
 std::string Publisher::endpoint() const {
@@ -119,18 +140,8 @@ Subscriber::Subscriber(zmq::context_t& ctx, const std::vector<std::string>& endp
 bool Subscriber::receive(TopicMessage& out, std::chrono::milliseconds timeout) {
   if (!wait_readable(socket_, timeout)) return false;
   zmq::message_t topic;
-  if (!socket_.recv(topic, zmq::recv_flags::dontwait)) return false;
-  if (!topic.more()) {
-    ++malformed_;
-    return false;
-  }
   zmq::message_t payload;
-  if (!socket_.recv(payload, zmq::recv_flags::dontwait)) return false;
-  if (payload.more()) {
-    drain(socket_);
-    ++malformed_;
-    return false;
-  }
+  if (!receive_pair(socket_, topic, payload, malformed_)) return false;
   out.topic.assign(static_cast<const char*>(topic.data()), topic.size());
   copy_to(payload, out.payload);
   return true;
@@ -182,31 +193,18 @@ bool Router::receive(std::string& peer, std::vector<std::uint8_t>& payload,
                      std::chrono::milliseconds timeout) {
   if (!wait_readable(socket_, timeout)) return false;
   zmq::message_t id;
-  if (!socket_.recv(id, zmq::recv_flags::dontwait)) return false;
-  if (!id.more()) {
-    ++malformed_;
-    return false;
-  }
   zmq::message_t m;
-  if (!socket_.recv(m, zmq::recv_flags::dontwait)) return false;
-  if (m.more()) {
-    drain(socket_);
-    ++malformed_;
-    return false;
-  }
+  if (!receive_pair(socket_, id, m, malformed_)) return false;
   peer.assign(static_cast<const char*>(id.data()), id.size());
   copy_to(m, payload);
   return true;
 }
 
 bool Router::send(const std::string& peer, std::span<const std::uint8_t> payload) {
+  const std::array<zmq::const_buffer, 2> parts{zmq::buffer(peer.data(), peer.size()),
+                                               zmq::buffer(payload.data(), payload.size())};
   try {
-    if (!socket_.send(zmq::buffer(peer.data(), peer.size()),
-                      zmq::send_flags::sndmore | zmq::send_flags::dontwait)) {
-      return false;
-    }
-    return socket_.send(zmq::buffer(payload.data(), payload.size()), zmq::send_flags::dontwait)
-        .has_value();
+    return zmq::send_multipart(socket_, parts, zmq::send_flags::dontwait).has_value();
   } catch (const zmq::error_t& e) {
     if (e.num() == EHOSTUNREACH) return false;  // the peer is gone
     throw;

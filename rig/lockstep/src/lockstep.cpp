@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <stdexcept>
 
@@ -13,7 +14,6 @@
 #include "tactile/rig/control_link.hpp"
 #include "tactile/rig/optics.hpp"
 #include "tactile/rig/world.hpp"
-#include "tactile/util/json.hpp"
 
 namespace tactile::rig {
 namespace {
@@ -412,134 +412,50 @@ std::string mismatches_csv(const RunSeries& series) {
 }
 
 std::string report_json(const Report& r) {
-  using util::json_number;
-  using util::json_quote;
-  std::string o;
-  const auto key = [&o](const char* k) {
-    o += json_quote(k);
-    o += ": ";
+  using nlohmann::ordered_json;  // keys in the order written: the interface's first
+  const auto optional = [](const auto& v) { return v ? ordered_json(*v) : ordered_json(nullptr); };
+  const auto precision_recall = [](double precision, double recall) {
+    return ordered_json{{"precision", precision}, {"recall", recall}};
   };
-  const auto opt_string = [&o](const std::optional<std::string>& s) {
-    o += s ? json_quote(*s) : std::string("null");
-  };
-  const auto opt_int = [&o](const std::optional<int>& v) {
-    o += v ? std::to_string(*v) : std::string("null");
-  };
-  // "precision": p, "recall": r (the measured score and the ideal sensor's).
-  const auto precision_recall = [&](double precision, double recall) {
-    key("precision");
-    json_number(o, precision);
-    o += ", ";
-    key("recall");
-    json_number(o, recall);
-  };
-  o += "{";
-  key("completed");
-  o += r.completed ? "true" : "false";
-  o += ", ";
-  key("dropped");
-  o += r.dropped ? "true" : "false";
-  o += ",\n ";
-  key("grasp_classified");
-  opt_string(r.grasp_classified);
-  o += ", ";
-  key("release_classified");
-  opt_string(r.release_classified);
-  o += ",\n ";
-  key("recompressions");
-  o += std::to_string(r.recompressions);
-  o += ", ";
-  key("twist_cycles");
-  o += std::to_string(r.twist_cycles);
-  o += ", ";
-  key("tightened_cycle");
-  opt_int(r.tightened_cycle);
-  o += ",\n ";
-  key("true_tight_cycle");
-  opt_int(r.true_tight_cycle);
-  o += ", ";
-  key("max_fz_N");
-  json_number(o, r.max_fz_N);
-  o += ", ";
-  key("over_events");
-  o += std::to_string(r.over_events);
-  o += ",\n ";
-  key("slip");
-  o += "{";
-  precision_recall(r.slip.precision, r.slip.recall);
-  o += ", ";
-  key("latency_frames_p50");
-  json_number(o, r.slip.latency_frames_p50);
-  o += ", ";
-  key("latency_frames_p99");
-  json_number(o, r.slip.latency_frames_p99);
-  o += ",\n          ";
-  key("true_positives");
-  o += std::to_string(r.slip.true_positives);
-  o += ", ";
-  key("false_positives");
-  o += std::to_string(r.slip.false_positives);
-  o += ", ";
-  key("false_negatives");
-  o += std::to_string(r.slip.false_negatives);
-  o += ", ";
-  key("onsets");
-  o += std::to_string(r.slip.onsets);
-  o += ", ";
-  key("missed_onsets");
-  o += std::to_string(r.slip.missed_onsets);
-  o += ",\n          ";
-  key("ideal_sensor");
-  o += "{";
-  precision_recall(r.slip.ideal_precision, r.slip.ideal_recall);
-  o += "}},\n ";
-  key("force_rmse_N");
-  o += "{";
-  key("normal");
-  json_number(o, r.force_rmse_normal_N);
-  o += ", ";
-  key("shear");
-  json_number(o, r.force_rmse_shear_N);
-  o += "},\n ";
-  key("latency_ms");
+  ordered_json slip = precision_recall(r.slip.precision, r.slip.recall);
+  slip["latency_frames_p50"] = r.slip.latency_frames_p50;
+  slip["latency_frames_p99"] = r.slip.latency_frames_p99;
+  slip["true_positives"] = r.slip.true_positives;
+  slip["false_positives"] = r.slip.false_positives;
+  slip["false_negatives"] = r.slip.false_negatives;
+  slip["onsets"] = r.slip.onsets;
+  slip["missed_onsets"] = r.slip.missed_onsets;
+  slip["ideal_sensor"] = precision_recall(r.slip.ideal_precision, r.slip.ideal_recall);
+  ordered_json latency_ms = nullptr;
   if (r.latency_ms) {
-    o += "{";
-    key("p50");
-    json_number(o, r.latency_ms->p50);
-    o += ", ";
-    key("p99");
-    json_number(o, r.latency_ms->p99);
-    o += ", ";
-    key("max");
-    json_number(o, r.latency_ms->max);
-    o += "},\n ";
-  } else {
-    o += "null,\n ";
+    latency_ms = {
+        {"p50", r.latency_ms->p50}, {"p99", r.latency_ms->p99}, {"max", r.latency_ms->max}};
   }
-  key("lockstep");
-  o += "{";
-  key("seed");
-  o += std::to_string(r.seed);
-  o += ", ";
-  key("sim_time_s");
-  json_number(o, r.sim_time_s);
-  o += ", ";
-  key("frames");
-  o += std::to_string(r.frames);
-  o += ", ";
-  key("physics_step_s");
-  json_number(o, r.physics_step_s);
-  o += ",\n              ";
-  key("final_cap_angle_deg");
-  json_number(o, r.final_cap_angle_deg);
-  o += ", ";
-  key("normal_full_scale_N");
-  json_number(o, r.normal_full_scale_N);
-  o += ", ";
-  key("end_reason");
-  o += json_quote(r.end_reason);
-  o += "}}\n";
-  return o;
+  const ordered_json report = {
+      {"completed", r.completed},
+      {"dropped", r.dropped},
+      {"grasp_classified", optional(r.grasp_classified)},
+      {"release_classified", optional(r.release_classified)},
+      {"recompressions", r.recompressions},
+      {"twist_cycles", r.twist_cycles},
+      {"tightened_cycle", optional(r.tightened_cycle)},
+      {"true_tight_cycle", optional(r.true_tight_cycle)},
+      {"max_fz_N", r.max_fz_N},
+      {"over_events", r.over_events},
+      {"slip", std::move(slip)},
+      {"force_rmse_N", {{"normal", r.force_rmse_normal_N}, {"shear", r.force_rmse_shear_N}}},
+      {"latency_ms", std::move(latency_ms)},
+      {"lockstep",
+       {{"seed", r.seed},
+        {"sim_time_s", r.sim_time_s},
+        {"frames", r.frames},
+        {"physics_step_s", r.physics_step_s},
+        {"final_cap_angle_deg", r.final_cap_angle_deg},
+        {"normal_full_scale_N", r.normal_full_scale_N},
+        {"end_reason", r.end_reason}}},
+  };
+  // Non-finite numbers are written as null; text that is not UTF-8 is replaced, not thrown on.
+  return report.dump(2, ' ', false, ordered_json::error_handler_t::replace) + "\n";
 }
 
 }  // namespace tactile::rig

@@ -33,10 +33,6 @@ namespace {
 
 using std::chrono::milliseconds;
 
-std::span<const std::uint8_t> bytes_of(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
 void fill_truth_message(const GroundTruth& gt, std::int64_t now_ns, v1::GroundTruth& out) {
   static const char* kIds[kFingertips] = {"left", "right"};
   out.set_time_ns(now_ns);
@@ -156,12 +152,12 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
   wire::Router arm(ctx, opt.arm_endpoint, opt.arm_security ? &*opt.arm_security : nullptr);
   std::optional<wire::Publisher> truth_pub;
   if (!opt.truth_endpoint.empty()) truth_pub.emplace(ctx, opt.truth_endpoint);
-  wire::Subscriber frames(ctx, opt.observe_frames, {"frame/"},
+  wire::Subscriber frames(ctx, opt.observe_frames, {wire::kFrameTopicPrefix},
                           opt.observe_security ? &*opt.observe_security : nullptr);
   std::optional<wire::Subscriber> events;
   if (!opt.observe_events.empty())
     events.emplace(ctx, std::vector<std::string>{opt.observe_events},
-                   std::vector<std::string>{"event"});
+                   std::vector<std::string>{wire::kEventTopic});
   util::log_info("arm controller on {}, ground truth on {}, deadman {:.0f} ms", arm.endpoint(),
                  truth_pub ? truth_pub->endpoint() : std::string("(none)"), opt.deadman_s * 1e3);
   if (opt.on_ready) opt.on_ready();
@@ -410,7 +406,7 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
     if (truth_pub) {
       fill_truth_message(kt.truth, util::realtime_ns(), *truth_env.mutable_ground_truth());
       wire::encode(truth_env, out);
-      truth_pub->send("truth", bytes_of(out));
+      truth_pub->send(wire::kTruthTopic, wire::bytes_of(out));
     }
     kept.push_back(std::move(kt));
     while (kept.size() > 64)
@@ -422,7 +418,7 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
                            *state_env.mutable_arm_state());
       if (deadman_tripped) state_env.mutable_arm_state()->add_faults(v1::ARM_FAULT_DEADMAN);
       wire::encode(state_env, out);
-      arm.send(peer, bytes_of(out));
+      arm.send(peer, wire::bytes_of(out));
       check_deadman(after);
     } else if (after - start_ns > static_cast<std::int64_t>(opt.wait_for_hand_s * 1e9)) {
       rep.end_reason = "no hand_node";

@@ -16,8 +16,7 @@ void check_round_trip(v1::Envelope& env) {
   static std::string bytes;
   static v1::Envelope again;
   wire::encode(env, bytes);
-  const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data());
-  fuzz::require(wire::decode({data, bytes.size()}, again) == wire::DecodeStatus::kOk,
+  fuzz::require(wire::decode(wire::bytes_of(bytes), again) == wire::DecodeStatus::kOk,
                 "an accepted envelope, encoded again, does not decode");
   fuzz::require(again.body_case() == env.body_case(), "the body changed on a round trip");
   std::string twice;

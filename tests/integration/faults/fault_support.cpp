@@ -129,7 +129,7 @@ std::filesystem::path write_sensor_config(const std::filesystem::path& dir,
 }
 
 Collector::Collector(zmq::context_t& ctx, const std::vector<std::string>& endpoints)
-    : sub_(ctx, endpoints, {"frame/", "stats/"}) {}
+    : sub_(ctx, endpoints, {wire::kFrameTopicPrefix, wire::kStatsTopicPrefix}) {}
 
 void Collector::poll(std::chrono::milliseconds wait) {
   auto timeout = wait;

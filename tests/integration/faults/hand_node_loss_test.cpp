@@ -25,10 +25,6 @@ using camera::testing::ChildProcess;
 
 const wire::FingertipIds kIds{"left", "right"};
 
-std::span<const std::uint8_t> bytes(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
 // The arm controller side: answers with a still arm (the approach segment never ends, so the
 // task stays in its first phase), keeps every command.
 class StillArm {
@@ -54,7 +50,7 @@ class StillArm {
     s.last_command_sequence = commands_.empty() ? 0 : commands_.back().sequence;
     wire::fill_arm_state(s, kIds, *out_env_.mutable_arm_state());
     wire::encode(out_env_, out_);
-    router_.send(peer_, bytes(out_));
+    router_.send(peer_, wire::bytes_of(out_));
     last_state_ns_ = now;
   }
 

@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -15,6 +16,7 @@
 #include <optional>
 #include <set>
 #include <thread>
+#include <zmq_addon.hpp>
 
 #include "garbage.hpp"
 #include "process.hpp"
@@ -33,10 +35,6 @@ using testing::Process;
 using testing::TempDir;
 
 const wire::FingertipIds kIds{"left", "right"};
-
-std::span<const std::uint8_t> bytes(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
 
 Calibration fingertip_calibration(const std::string& id) {
   testing::SceneOptions o;
@@ -261,17 +259,16 @@ class HandNodeRun {
       flood_thread = std::thread([&] {
         testing::Garbage g(valid, 7);
         for (std::uint64_t i = 0; i < flood.tactile_messages && !flood_stop; ++i) {
+          const std::string topic = wire::frame_topic(kIds[i % 2]);
           const std::string m = g.next();
-          flooder.send(zmq::buffer(kIds[i % 2] == "left" ? std::string("frame/left")
-                                                         : std::string("frame/right")),
-                       zmq::send_flags::sndmore);
-          flooder.send(zmq::buffer(m), zmq::send_flags::none);
+          const std::array<zmq::const_buffer, 2> parts{zmq::buffer(topic), zmq::buffer(m)};
+          (void)zmq::send_multipart(flooder, parts);
           if (i % 1000 == 999) std::this_thread::sleep_for(5ms);  // spread over the run
         }
       });
     }
     testing::Garbage arm_garbage(valid, 11);
-    wire::Subscriber events(ctx, {events_endpoint}, {"event"});
+    wire::Subscriber events(ctx, {events_endpoint}, {wire::kEventTopic});
 
     SimWorld world(cals_);
     RunResult r;
@@ -351,16 +348,16 @@ class HandNodeRun {
         wire::fill_tactile_frame(kIds[t], h, readings[t], cals_[t].mm_per_px,
                                  *env.mutable_tactile_frame());
         wire::encode(env, out);
-        sensors.send("frame/" + kIds[t], bytes(out));
+        sensors.send(wire::frame_topic(kIds[t]), wire::bytes_of(out));
         published.insert({kIds[t], h.sequence});
       }
       world.note_contact();
       if (!peer.empty() && inj.send_arm_state) {
         wire::fill_arm_state(world.state(last_command), kIds, *env.mutable_arm_state());
         wire::encode(env, out);
-        arm.send(peer, bytes(out));
+        arm.send(peer, wire::bytes_of(out));
         for (std::uint64_t i = 0; i < flood.arm_messages_per_frame; ++i)
-          arm.send(peer, bytes(arm_garbage.next()));
+          arm.send(peer, wire::bytes_of(arm_garbage.next()));
       }
     }
     flood_stop = true;

@@ -22,10 +22,6 @@ using namespace std::chrono_literals;
 const wire::FingertipIds kIds{"left", "right"};
 constexpr std::uint64_t kIntruderSequence = 1'000'000;
 
-std::span<const std::uint8_t> bytes(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
 class SecuredHandNode : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -63,7 +59,7 @@ class SecuredHandNode : public ::testing::Test {
       wire::fill_tactile_frame(kIds[t], h, readings, cals_[t].mm_per_px,
                                *env_.mutable_tactile_frame());
       wire::encode(env_, out_);
-      pub.send("frame/" + kIds[t], bytes(out_));
+      pub.send(wire::frame_topic(kIds[t]), wire::bytes_of(out_));
     }
   }
 
@@ -114,7 +110,7 @@ TEST_F(SecuredHandNode, TakesFramesOnlyFromTheSensorItHasTheKeyOf) {
         wire::fill_arm_state(state, kIds, *env.mutable_arm_state());
         std::string out;
         wire::encode(env, out);
-        arm.send(peer, bytes(out));
+        arm.send(peer, wire::bytes_of(out));
       }
     }
   };

@@ -80,7 +80,7 @@ TEST_F(SensorNodeAgainstAravisFake, PublishesOneWholeFramePerCameraFrame) {
   ChildProcess fake({"arv-fake-gv-camera-0.8", "-i", "127.0.0.2", "-s", "TACTILE01"});
   Process node(args("127.0.0.2"));
   zmq::context_t ctx;
-  wire::Subscriber sub(ctx, {endpoint_}, {"frame/left", "stats/left"});
+  wire::Subscriber sub(ctx, {endpoint_}, {wire::frame_topic("left"), wire::stats_topic("left")});
   const Collected c = collect(sub, 150, 20s);
   ASSERT_GE(c.frames.size(), 150U) << node.err_so_far() << fake.output();
   for (std::size_t i = 1; i < c.frames.size(); ++i) {
@@ -131,7 +131,7 @@ TEST_F(SensorNodeAgainstAravisFake, WaitsForAnAbsentCameraAndStopsCleanly) {
   // A camera that appears later is picked up.
   ChildProcess fake({"arv-fake-gv-camera-0.8", "-i", "127.0.0.3", "-s", "TACTILE02"});
   zmq::context_t ctx;
-  wire::Subscriber sub(ctx, {endpoint_}, {"frame/left"});
+  wire::Subscriber sub(ctx, {endpoint_}, {wire::frame_topic("left")});
   const Collected c = collect(sub, 10, 20s);
   EXPECT_GE(c.frames.size(), 10U) << node.err_so_far();
   node.signal(SIGTERM);
@@ -163,7 +163,7 @@ TEST_F(SensorNodeAgainstAravisFake, RealtimeSectionCoversAravisAndZeroMQThreadsO
   ChildProcess fake({"arv-fake-gv-camera-0.8", "-i", "127.0.0.2", "-s", "TACTILE01"});
   Process node(argv);
   zmq::context_t ctx;
-  wire::Subscriber sub(ctx, {endpoint_}, {"frame/left"});
+  wire::Subscriber sub(ctx, {endpoint_}, {wire::frame_topic("left")});
   // Frames flow: Aravis's stream thread and ZeroMQ's I/O thread are running.
   const Collected c = collect(sub, 20, 20s);
   ASSERT_GE(c.frames.size(), 20U) << node.err_so_far() << fake.output();

@@ -91,7 +91,8 @@ TEST(RealtimeSoak, TenMinutesOfRunsMemoryBoundedLatencySteadyCountersAddUp) {
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
   zmq::context_t ctx;
-  wire::Subscriber sub(ctx, {"tcp://127.0.0.1:5555"}, {"frame/", "stats/"});
+  wire::Subscriber sub(ctx, {"tcp://127.0.0.1:5555"},
+                       {wire::kFrameTopicPrefix, wire::kStatsTopicPrefix});
   Process sensor({TACTILE_SENSOR_NODE_PATH, "--config", (config / "sensor_node.yaml").string()});
 
   std::map<std::string, Stream> streams;

@@ -140,8 +140,8 @@ class LoopbackSystem {
   std::string scenario_;
   TempDir dir_;
   zmq::context_t ctx_;
-  wire::Subscriber events_{ctx_, {"tcp://127.0.0.1:5558"}, {"event"}};
-  wire::Subscriber truth_{ctx_, {"tcp://127.0.0.1:5557"}, {"truth"}};
+  wire::Subscriber events_{ctx_, {"tcp://127.0.0.1:5558"}, {wire::kEventTopic}};
+  wire::Subscriber truth_{ctx_, {"tcp://127.0.0.1:5557"}, {wire::kTruthTopic}};
   std::optional<Process> rig_;
   std::optional<Process> sensor_;
   std::optional<Process> hand_;

@@ -29,10 +29,6 @@ namespace {
 
 using namespace tactile;
 
-std::span<const std::uint8_t> bytes(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
 struct Options {
   std::string calibration;
   int frames = 40;
@@ -95,8 +91,8 @@ int run(const Options& opt) {
   v1::RawFrame raw;
   std::string raw_buf;
   std::uint64_t sent = 0;
-  const std::string topic = "frame/" + cal.sensor_id;
-  const std::string raw_topic = std::string(wire::kRawTopicPrefix) + cal.sensor_id;
+  const std::string topic = wire::frame_topic(cal.sensor_id);
+  const std::string raw_topic = wire::raw_topic(cal.sensor_id);
   auto send_reference = [&] {
     raw.Clear();
     raw.set_sensor_id(cal.sensor_id);
@@ -104,7 +100,7 @@ int run(const Options& opt) {
     wire::fill_raw_pixels(reference.view(), raw);
     wire::fill_settings(xo, *raw.mutable_settings());
     raw.SerializeToString(&raw_buf);
-    frames.send(raw_topic, bytes(raw_buf));
+    frames.send(raw_topic, wire::bytes_of(raw_buf));
     ++sent;
   };
   if (opt.raw) send_reference();
@@ -144,7 +140,7 @@ int run(const Options& opt) {
     wire::fill_tactile_frame(cal.sensor_id, h, extractor.readings(), cal.mm_per_px,
                              *env.mutable_tactile_frame());
     wire::encode(env, buf);
-    frames.send(topic, bytes(buf));
+    frames.send(topic, wire::bytes_of(buf));
     ++sent;
     if (opt.raw) {
       raw.Clear();
@@ -158,7 +154,7 @@ int run(const Options& opt) {
       raw.set_forget_previous(restart);
       wire::fill_raw_pixels(img.view(), raw);
       raw.SerializeToString(&raw_buf);
-      frames.send(raw_topic, bytes(raw_buf));
+      frames.send(raw_topic, wire::bytes_of(raw_buf));
       ++sent;
       if ((k + 1) % opt.reference_every == 0) send_reference();
     }
@@ -173,7 +169,7 @@ int run(const Options& opt) {
       e->set_value(0.1 * k);
       e->set_text("event at frame " + std::to_string(k));
       wire::encode(ev, buf);
-      events->send("event", bytes(buf));
+      events->send(wire::kEventTopic, wire::bytes_of(buf));
       ++sent;
     }
     if (truth && k % 5 == 0) {
@@ -185,7 +181,7 @@ int run(const Options& opt) {
       g->mutable_object_position_m()->set_z(0.05);
       g->set_cap_angle_deg(2.0 * k);
       wire::encode(gt, buf);
-      truth->send("truth", bytes(buf));
+      truth->send(wire::kTruthTopic, wire::bytes_of(buf));
       ++sent;
     }
   }

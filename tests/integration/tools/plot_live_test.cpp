@@ -25,10 +25,6 @@ using testing::Process;
 using testing::TempDir;
 using tools_test::await_match;
 
-std::span<const std::uint8_t> bytes(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
 // A TactileFrame of 41 elements: elements 0..10 in contact, shear growing with k, element 4
 // slipping down on every 10th frame.
 void fill_frame(v1::TactileFrame& f, const std::string& id, std::uint64_t k, std::int64_t now) {
@@ -70,15 +66,16 @@ void write_test_log(const std::filesystem::path& path, bool with_truth, bool wit
       g->Clear();
       g->mutable_object_position_m()->set_x(0.300 + 0.0005 * static_cast<double>(k));
       wire::encode(env, buf);
-      ASSERT_EQ(w.append(t, "truth", "tcp://rig", v1::PAYLOAD_KIND_ENVELOPE, bytes(buf)),
+      ASSERT_EQ(w.append(t, wire::kTruthTopic, "tcp://rig", v1::PAYLOAD_KIND_ENVELOPE,
+                         wire::bytes_of(buf)),
                 recording::WriteStatus::kOk);
     }
     for (const char* id : {"left", "right"}) {
       if (!with_frames) break;
       fill_frame(*env.mutable_tactile_frame(), id, k, t);
       wire::encode(env, buf);
-      ASSERT_EQ(w.append(t + 500'000, std::string("frame/") + id, "tcp://sensor",
-                         v1::PAYLOAD_KIND_ENVELOPE, bytes(buf)),
+      ASSERT_EQ(w.append(t + 500'000, wire::frame_topic(id), "tcp://sensor",
+                         v1::PAYLOAD_KIND_ENVELOPE, wire::bytes_of(buf)),
                 recording::WriteStatus::kOk);
     }
     if (k % 25 == 3) {
@@ -87,7 +84,8 @@ void write_test_log(const std::filesystem::path& path, bool with_truth, bool wit
       e->set_time_ns(t);
       e->set_kind(k == 3 ? v1::EVENT_KIND_GRASPING_ENDED : v1::EVENT_KIND_RECOMPRESS);
       wire::encode(env, buf);
-      ASSERT_EQ(w.append(t, "event", "tcp://hand", v1::PAYLOAD_KIND_ENVELOPE, bytes(buf)),
+      ASSERT_EQ(w.append(t, wire::kEventTopic, "tcp://hand", v1::PAYLOAD_KIND_ENVELOPE,
+                         wire::bytes_of(buf)),
                 recording::WriteStatus::kOk);
     }
   }
@@ -166,7 +164,7 @@ void publish_until(wire::Publisher& frames, wire::Publisher& events, Done done) 
     for (const char* id : {"left", "right"}) {
       fill_frame(*env.mutable_tactile_frame(), id, k, util::realtime_ns());
       wire::encode(env, buf);
-      frames.send(std::string("frame/") + id, bytes(buf));
+      frames.send(wire::frame_topic(id), wire::bytes_of(buf));
     }
     if (k % 20 == 0) {
       auto* e = env.mutable_event();
@@ -178,7 +176,7 @@ void publish_until(wire::Publisher& frames, wire::Publisher& events, Done done) 
       e->set_element_id(4);
       e->set_text("re-compress");
       wire::encode(env, buf);
-      events.send("event", bytes(buf));
+      events.send(wire::kEventTopic, wire::bytes_of(buf));
     }
     ++k;
     std::this_thread::sleep_for(5ms);

@@ -82,10 +82,10 @@ TEST(Record, HoldsEveryMessageOfEverySourceWithItsTopicSourceAndTime) {
   ASSERT_EQ(log.header.sources_size(), 3);
   EXPECT_EQ(log.header.sources(0).endpoint(), run.frames);
   EXPECT_EQ(static_cast<int>(log.records.size()), expected_messages());
-  EXPECT_EQ(log.per_topic.at("frame/left"), kFrames);
-  EXPECT_EQ(log.per_topic.at("raw/left"), kFrames + 1 + kFrames / 25);
-  EXPECT_EQ(log.per_topic.at("event"), 4);
-  EXPECT_EQ(log.per_topic.at("truth"), 8);
+  EXPECT_EQ(log.per_topic.at(wire::frame_topic("left")), kFrames);
+  EXPECT_EQ(log.per_topic.at(wire::raw_topic("left")), kFrames + 1 + kFrames / 25);
+  EXPECT_EQ(log.per_topic.at(wire::kEventTopic), 4);
+  EXPECT_EQ(log.per_topic.at(wire::kTruthTopic), 8);
   std::uint64_t next_sequence = 0;
   std::int64_t last_time = 0;
   v1::Envelope env;
@@ -95,18 +95,18 @@ TEST(Record, HoldsEveryMessageOfEverySourceWithItsTopicSourceAndTime) {
     EXPECT_GE(r.receive_time_ns(), last_time);  // receive times never go back on one host
     last_time = r.receive_time_ns();
     const std::string& expected_source =
-        r.topic() == "event" ? run.events : (r.topic() == "truth" ? run.truth : run.frames);
+        r.topic() == wire::kEventTopic ? run.events
+                                       : (r.topic() == wire::kTruthTopic ? run.truth : run.frames);
     EXPECT_EQ(r.source(), expected_source) << r.topic();
-    if (r.topic() == "raw/left") {
+    if (r.topic() == wire::raw_topic("left")) {
       EXPECT_EQ(r.kind(), v1::PAYLOAD_KIND_RAW_FRAME);
       v1::RawFrame raw;
       EXPECT_TRUE(raw.ParseFromString(r.payload()));
       continue;
     }
     EXPECT_EQ(r.kind(), v1::PAYLOAD_KIND_ENVELOPE);
-    const auto* p = reinterpret_cast<const std::uint8_t*>(r.payload().data());
-    ASSERT_EQ(wire::decode({p, r.payload().size()}, env), wire::DecodeStatus::kOk);
-    if (r.topic() == "frame/left") {
+    ASSERT_EQ(wire::decode(wire::bytes_of(r.payload()), env), wire::DecodeStatus::kOk);
+    if (r.topic() == wire::frame_topic("left")) {
       ASSERT_TRUE(env.has_tactile_frame());
       EXPECT_EQ(env.tactile_frame().sequence(), next_sequence++);
     }
@@ -164,9 +164,8 @@ TEST(Remeasure, ALogWithoutRawFramesSaysWhatIsMissing) {
     v1::LogRecord rec;
     while (in.next(rec) == recording::ReadStatus::kRecord) {
       if (rec.kind() == v1::PAYLOAD_KIND_RAW_FRAME) continue;
-      const auto* p = reinterpret_cast<const std::uint8_t*>(rec.payload().data());
       ASSERT_EQ(out.append(rec.receive_time_ns(), rec.topic(), rec.source(), rec.kind(),
-                           {p, rec.payload().size()}),
+                           wire::bytes_of(rec.payload())),
                 recording::WriteStatus::kOk);
     }
   }
@@ -190,14 +189,15 @@ TEST(Replay, AsFastAsPossibleGivesEveryRecordedMessageByteForByte) {
   const auto log = read_log(dir / "run.tlog");
   Process replay({TACTILE_REPLAY_PATH, (dir / "run.tlog").string(), "--publish",
                   "tcp://127.0.0.1:*", "--as-fast-as-possible", "--wait-subscriptions", "1",
-                  "--topic", "frame/", "--topic", "event"});
+                  "--topic", wire::kFrameTopicPrefix, "--topic", wire::kEventTopic});
   const std::string ep = replay_endpoint(replay);
   ASSERT_FALSE(ep.empty()) << replay.err_so_far();
   zmq::context_t ctx;
   wire::Subscriber sub(ctx, {ep}, {""});
   std::vector<const v1::LogRecord*> wanted;
   for (const auto& r : log.records) {
-    if (r.topic().starts_with("frame/") || r.topic() == "event") wanted.push_back(&r);
+    if (r.topic().starts_with(wire::kFrameTopicPrefix) || r.topic() == wire::kEventTopic)
+      wanted.push_back(&r);
   }
   ASSERT_EQ(wanted.size(), static_cast<std::size_t>(kFrames + 4));
   wire::TopicMessage m;
@@ -230,10 +230,9 @@ TEST(Replay, KeepsTheRecordedPaceScaledBySpeed) {
       e->set_time_ns(i);
       e->set_kind(v1::EVENT_KIND_PHASE);
       wire::encode(env, buf);
-      ASSERT_EQ(
-          w.append(1'000'000'000LL + i * 50'000'000LL, "event", "x", v1::PAYLOAD_KIND_ENVELOPE,
-                   {reinterpret_cast<const std::uint8_t*>(buf.data()), buf.size()}),
-          recording::WriteStatus::kOk);
+      ASSERT_EQ(w.append(1'000'000'000LL + i * 50'000'000LL, wire::kEventTopic, "x",
+                         v1::PAYLOAD_KIND_ENVELOPE, wire::bytes_of(buf)),
+                recording::WriteStatus::kOk);
     }
   }
   for (const auto& [speed, least_ms] : {std::pair<std::string, int>{"1", 500}, {"10", 50}}) {
@@ -242,7 +241,7 @@ TEST(Replay, KeepsTheRecordedPaceScaledBySpeed) {
     const std::string ep = replay_endpoint(replay);
     ASSERT_FALSE(ep.empty());
     zmq::context_t ctx;
-    wire::Subscriber sub(ctx, {ep}, {"event"});
+    wire::Subscriber sub(ctx, {ep}, {wire::kEventTopic});
     wire::TopicMessage m;
     int got = 0;
     std::chrono::steady_clock::time_point first;
@@ -278,7 +277,7 @@ TEST(Record, StopsCleanlyOnSignalsAndKeepsWhatItGot) {
     const auto deadline = std::chrono::steady_clock::now() + 20s;
     std::uintmax_t header_size = 0;
     while (std::chrono::steady_clock::now() < deadline) {
-      pub.send("event", {reinterpret_cast<const std::uint8_t*>(buf.data()), buf.size()});
+      pub.send(wire::kEventTopic, wire::bytes_of(buf));
       std::error_code ec;
       const auto size = std::filesystem::file_size(path, ec);
       if (!ec && header_size == 0) header_size = size;
@@ -290,7 +289,7 @@ TEST(Record, StopsCleanlyOnSignalsAndKeepsWhatItGot) {
     EXPECT_EQ(r.exit_code, 0) << r.err;
     const auto log = read_log(path);
     EXPECT_EQ(log.end, recording::ReadStatus::kEnd);
-    EXPECT_GE(log.per_topic.at("event"), 1);
+    EXPECT_GE(log.per_topic.at(wire::kEventTopic), 1);
   }
 }
 
@@ -308,7 +307,7 @@ TEST(Record, KilledMidRunLeavesALogThatReadsUpToItsLastWholeFrame) {
   wire::encode(env, buf);
   const auto deadline = std::chrono::steady_clock::now() + 20s;
   while (std::chrono::steady_clock::now() < deadline) {
-    pub.send("event", {reinterpret_cast<const std::uint8_t*>(buf.data()), buf.size()});
+    pub.send(wire::kEventTopic, wire::bytes_of(buf));
     std::error_code ec;
     if (std::filesystem::file_size(path, ec) > 20000 && !ec) break;
     std::this_thread::sleep_for(1ms);
@@ -317,7 +316,7 @@ TEST(Record, KilledMidRunLeavesALogThatReadsUpToItsLastWholeFrame) {
   rec.wait(10s);
   const auto log = read_log(path);
   EXPECT_NE(log.end, recording::ReadStatus::kCorrupt);
-  EXPECT_GE(log.per_topic.at("event"), 3);
+  EXPECT_GE(log.per_topic.at(wire::kEventTopic), 3);
   for (const auto& r : log.records)
     EXPECT_EQ(r.payload(), buf);
 }
@@ -345,13 +344,13 @@ TEST(Record, CurveSubscriptionTakesOnlyTheKeyHolder) {
   wire::encode(env, buf);
   const auto deadline = std::chrono::steady_clock::now() + 20s;
   while (rec_good.running() && std::chrono::steady_clock::now() < deadline) {
-    pub.send("event", {reinterpret_cast<const std::uint8_t*>(buf.data()), buf.size()});
+    pub.send(wire::kEventTopic, wire::bytes_of(buf));
     std::this_thread::sleep_for(5ms);
   }
   const auto r = rec_good.wait(10s);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("(CURVE)"), std::string::npos) << r.err;
-  EXPECT_EQ(read_log(good).per_topic.at("event"), 5);
+  EXPECT_EQ(read_log(good).per_topic.at(wire::kEventTopic), 5);
   rec_bad.signal(SIGTERM);
   EXPECT_EQ(rec_bad.wait(10s).exit_code, 0);
   EXPECT_TRUE(read_log(bad).records.empty());
@@ -408,7 +407,7 @@ TEST(Replay, InfoDescribesTheLogAndStopsOnSignalWhileWaiting) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("tactile-log/1 written by tactile_record"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("note: fake run"), std::string::npos) << r.out;
-  EXPECT_TRUE(std::regex_search(r.out, std::regex("frame/left\\s+40")));
+  EXPECT_TRUE(std::regex_search(r.out, std::regex(wire::frame_topic("left") + "\\s+40")));
   EXPECT_NE(r.out.find("end: end"), std::string::npos) << r.out;
   // Cut it: --info reports the truncated tail and still succeeds.
   std::string bytes = util::read_file(dir / "run.tlog");

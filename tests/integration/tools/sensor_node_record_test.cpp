@@ -42,7 +42,7 @@ TEST(SensorNodeRecording, RecordsReplaysAndPlotsARealSensorNode) {
                 (dir / "left.yaml").string(), "--reference", (dir / "zero.pgm").string(),
                 "--publish", endpoint, "--fps", "100"});
   const auto rec = testing::run({TACTILE_RECORD_PATH, "-o", (dir / "node.tlog").string(), endpoint,
-                                 "--topic", "frame/", "--count", "120"},
+                                 "--topic", wire::kFrameTopicPrefix, "--count", "120"},
                                 60s);
   ASSERT_EQ(rec.exit_code, 0) << rec.err << node.err_so_far() << fake.output();
   EXPECT_NE(rec.err.find("recorded 120 messages"), std::string::npos) << rec.err;
@@ -54,10 +54,9 @@ TEST(SensorNodeRecording, RecordsReplaysAndPlotsARealSensorNode) {
   std::uint64_t previous = 0;
   for (std::size_t i = 0; i < log.records.size(); ++i) {
     const auto& r = log.records[i];
-    EXPECT_EQ(r.topic(), "frame/left");
+    EXPECT_EQ(r.topic(), wire::frame_topic("left"));
     EXPECT_EQ(r.source(), endpoint);
-    const auto* p = reinterpret_cast<const std::uint8_t*>(r.payload().data());
-    ASSERT_EQ(wire::decode({p, r.payload().size()}, env), wire::DecodeStatus::kOk);
+    ASSERT_EQ(wire::decode(wire::bytes_of(r.payload()), env), wire::DecodeStatus::kOk);
     const v1::TactileFrame& f = env.tactile_frame();
     // The camera's very first frame may be incomplete (Aravis applies the socket buffer when it
     // starts, docs/camera.md); it is published as such, never measured. Every other is whole.
@@ -80,7 +79,7 @@ TEST(SensorNodeRecording, RecordsReplaysAndPlotsARealSensorNode) {
   const auto ep = await_match([&] { return replay.err_so_far(); }, "publishing on (tcp://\\S+)");
   ASSERT_TRUE(ep) << replay.err_so_far();
   zmq::context_t ctx;
-  wire::Subscriber sub(ctx, {*ep}, {"frame/"});
+  wire::Subscriber sub(ctx, {*ep}, {wire::kFrameTopicPrefix});
   wire::TopicMessage m;
   std::size_t got = 0;
   const auto deadline = std::chrono::steady_clock::now() + 20s;

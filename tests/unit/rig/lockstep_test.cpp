@@ -5,6 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
 
 namespace tactile::rig {
 namespace {
@@ -50,21 +54,99 @@ TEST(Lockstep, SameSeedSameReportBytes) {
   EXPECT_NE(report_json(run_lockstep(s, o).report), a);
 }
 
+// INTERFACES.md section 4: every key, with its JSON type; ours beside them.
 TEST(Lockstep, ReportHasTheInterfaceKeys) {
   Report rep;
   rep.grasp_classified = "grasp";
   rep.tightened_cycle = 3;
-  const std::string j = report_json(rep);
-  for (const char* key : {"\"completed\"", "\"dropped\"", "\"grasp_classified\": \"grasp\"",
-                          "\"release_classified\": null", "\"recompressions\"", "\"twist_cycles\"",
-                          "\"tightened_cycle\": 3", "\"true_tight_cycle\": null", "\"max_fz_N\"",
-                          "\"over_events\"", "\"slip\"", "\"precision\"", "\"recall\"",
-                          "\"latency_frames_p50\"", "\"latency_frames_p99\"", "\"force_rmse_N\"",
-                          "\"normal\"", "\"shear\"", "\"latency_ms\": null"}) {
-    EXPECT_NE(j.find(key), std::string::npos) << key;
+  rep.slip.true_positives = 7;
+  rep.seed = 5;
+  rep.end_reason = "done";
+  const nlohmann::json j = nlohmann::json::parse(report_json(rep));
+  ASSERT_TRUE(j.is_object());
+  EXPECT_TRUE(j.at("completed").is_boolean());
+  EXPECT_TRUE(j.at("dropped").is_boolean());
+  EXPECT_EQ(j.at("grasp_classified"), "grasp");
+  EXPECT_TRUE(j.at("release_classified").is_null());
+  EXPECT_TRUE(j.at("recompressions").is_number_integer());
+  EXPECT_TRUE(j.at("twist_cycles").is_number_integer());
+  EXPECT_TRUE(j.at("tightened_cycle").is_number_integer());
+  EXPECT_EQ(j.at("tightened_cycle"), 3);
+  EXPECT_TRUE(j.at("true_tight_cycle").is_null());
+  EXPECT_TRUE(j.at("max_fz_N").is_number());
+  EXPECT_TRUE(j.at("over_events").is_number_integer());
+  const nlohmann::json& slip = j.at("slip");
+  ASSERT_TRUE(slip.is_object());
+  for (const char* key : {"precision", "recall", "latency_frames_p50", "latency_frames_p99"}) {
+    EXPECT_TRUE(slip.at(key).is_number()) << key;
   }
+  const nlohmann::json& rmse = j.at("force_rmse_N");
+  ASSERT_TRUE(rmse.is_object());
+  EXPECT_TRUE(rmse.at("normal").is_number());
+  EXPECT_TRUE(rmse.at("shear").is_number());
+  EXPECT_TRUE(j.at("latency_ms").is_null());  // lockstep: no wire, no latency
   // Ours, beside the interface's.
-  EXPECT_NE(j.find("\"ideal_sensor\": {\"precision\""), std::string::npos) << j;
+  for (const char* key :
+       {"true_positives", "false_positives", "false_negatives", "onsets", "missed_onsets"}) {
+    EXPECT_TRUE(slip.at(key).is_number_unsigned()) << key;
+  }
+  EXPECT_EQ(slip.at("true_positives"), 7);
+  const nlohmann::json& ideal = slip.at("ideal_sensor");
+  ASSERT_TRUE(ideal.is_object());
+  EXPECT_TRUE(ideal.at("precision").is_number());
+  EXPECT_TRUE(ideal.at("recall").is_number());
+  const nlohmann::json& lockstep = j.at("lockstep");
+  ASSERT_TRUE(lockstep.is_object());
+  EXPECT_EQ(lockstep.at("seed"), 5);
+  EXPECT_TRUE(lockstep.at("seed").is_number_unsigned());
+  EXPECT_TRUE(lockstep.at("frames").is_number_unsigned());
+  for (const char* key :
+       {"sim_time_s", "physics_step_s", "final_cap_angle_deg", "normal_full_scale_N"}) {
+    EXPECT_TRUE(lockstep.at(key).is_number()) << key;
+  }
+  EXPECT_EQ(lockstep.at("end_reason"), "done");
+  // The interface's keys first, in its order; ours after them.
+  const nlohmann::ordered_json in_order = nlohmann::ordered_json::parse(report_json(rep));
+  std::vector<std::string> keys;
+  for (const auto& [key, value] : in_order.items())
+    keys.push_back(key);
+  EXPECT_EQ(keys,
+            (std::vector<std::string>{
+                "completed", "dropped", "grasp_classified", "release_classified", "recompressions",
+                "twist_cycles", "tightened_cycle", "true_tight_cycle", "max_fz_N", "over_events",
+                "slip", "force_rmse_N", "latency_ms", "lockstep"}));
+}
+
+// A distributed run's latency is an object of three numbers; a number that is not finite is
+// null (the JSON has no other way to say it), never invalid JSON.
+TEST(Lockstep, ReportLatencyAndNonFiniteNumbers) {
+  Report rep;
+  rep.latency_ms = Report::Latency{0.6, 1.8, 4.0};
+  rep.max_fz_N = std::numeric_limits<double>::quiet_NaN();
+  rep.force_rmse_shear_N = std::numeric_limits<double>::infinity();
+  const nlohmann::json j = nlohmann::json::parse(report_json(rep));
+  const nlohmann::json& latency = j.at("latency_ms");
+  ASSERT_TRUE(latency.is_object());
+  EXPECT_DOUBLE_EQ(latency.at("p50").get<double>(), 0.6);
+  EXPECT_DOUBLE_EQ(latency.at("p99").get<double>(), 1.8);
+  EXPECT_DOUBLE_EQ(latency.at("max").get<double>(), 4.0);
+  EXPECT_TRUE(j.at("max_fz_N").is_null());
+  EXPECT_TRUE(j.at("force_rmse_N").at("shear").is_null());
+  EXPECT_TRUE(j.at("force_rmse_N").at("normal").is_number());
+}
+
+// The report's numbers read back as the very doubles of the Report (shortest round trip).
+TEST(Lockstep, ReportNumbersReadBackExactly) {
+  Report rep;
+  rep.max_fz_N = 0.8516666666666668;
+  rep.slip.precision = 0.9518900343642611;
+  rep.final_cap_angle_deg = 240.00000000000009;
+  rep.physics_step_s = 1e-4;
+  const nlohmann::json j = nlohmann::json::parse(report_json(rep));
+  EXPECT_EQ(j.at("max_fz_N").get<double>(), rep.max_fz_N);
+  EXPECT_EQ(j.at("slip").at("precision").get<double>(), rep.slip.precision);
+  EXPECT_EQ(j.at("lockstep").at("final_cap_angle_deg").get<double>(), rep.final_cap_angle_deg);
+  EXPECT_EQ(j.at("lockstep").at("physics_step_s").get<double>(), rep.physics_step_s);
 }
 
 }  // namespace

@@ -19,7 +19,10 @@ LiveState fixed_state() {
   s.messages = 12345;
   s.phase = "TWIST_TURN";
   s.cycle = 2;
-  s.rates = {{"frame/left", 100.0}, {"frame/right", 99.5}, {"event", 0.5}, {"stats/left", 1.0}};
+  s.rates = {{wire::frame_topic("left"), 100.0},
+             {wire::frame_topic("right"), 99.5},
+             {wire::kEventTopic, 0.5},
+             {wire::stats_topic("left"), 1.0}};
   for (const char* id : {"left", "right"}) {
     FingertipView f;
     f.id = id;
@@ -137,10 +140,6 @@ TEST(LiveRender, DomeLayoutIsTheRingsOrTheCalibration) {
   EXPECT_DOUBLE_EQ(c[1][1], 20.0);
 }
 
-std::span<const std::uint8_t> bytes(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
 TEST(LiveModel, FramesEventsAndStatsBecomeTheState) {
   LiveModel m({});
   v1::Envelope env;
@@ -163,7 +162,7 @@ TEST(LiveModel, FramesEventsAndStatsBecomeTheState) {
       }
     }
     wire::encode(env, buf);
-    EXPECT_EQ(m.add("frame/left", bytes(buf), now), -1);
+    EXPECT_EQ(m.add(wire::frame_topic("left"), wire::bytes_of(buf), now), -1);
     now += 10'000'000;
   }
   auto* ev = env.mutable_event();
@@ -172,13 +171,13 @@ TEST(LiveModel, FramesEventsAndStatsBecomeTheState) {
   ev->set_phase("TWIST_TURN");
   ev->set_cycle(3);
   wire::encode(env, buf);
-  EXPECT_EQ(m.add("event", bytes(buf), now), 0);
+  EXPECT_EQ(m.add(wire::kEventTopic, wire::bytes_of(buf), now), 0);
   auto* st = env.mutable_sensor_stats();
   st->set_sensor_id("left");
   st->set_frames(77);
   wire::encode(env, buf);
-  m.add("stats/left", bytes(buf), now);
-  EXPECT_EQ(m.add("frame/left", bytes("garbage"), now), -1);
+  m.add(wire::stats_topic("left"), wire::bytes_of(buf), now);
+  EXPECT_EQ(m.add(wire::frame_topic("left"), wire::bytes_of("garbage"), now), -1);
   m.tick(now + 2'000'000'000, 42);
   const LiveState& s = m.state();
   ASSERT_EQ(s.fingertips.size(), 1U);

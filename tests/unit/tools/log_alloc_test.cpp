@@ -19,16 +19,16 @@ TEST(LogWriterAlloc, AppendAllocatesNothingInSteadyState) {
   std::string payload(4000, 'x');
   for (std::size_t i = 0; i < payload.size(); i += 3)
     payload[i] = static_cast<char>(i);
-  const std::span<const std::uint8_t> p(reinterpret_cast<const std::uint8_t*>(payload.data()),
-                                        payload.size());
+  const std::span<const std::uint8_t> p = wire::bytes_of(payload);
+  const std::string topic = wire::frame_topic("left");
   for (int i = 0; i < 50; ++i)  // warm up: buffers grow to size
-    ASSERT_EQ(w.append(i, "frame/left", "tcp://127.0.0.1:5555", v1::PAYLOAD_KIND_ENVELOPE, p),
+    ASSERT_EQ(w.append(i, topic, "tcp://127.0.0.1:5555", v1::PAYLOAD_KIND_ENVELOPE, p),
               WriteStatus::kOk);
   std::size_t allocations = 0;
   {
     testing::AllocationScope scope;
     for (int i = 0; i < 200; ++i) {
-      (void)w.append(i, "frame/left", "tcp://127.0.0.1:5555", v1::PAYLOAD_KIND_ENVELOPE, p);
+      (void)w.append(i, topic, "tcp://127.0.0.1:5555", v1::PAYLOAD_KIND_ENVELOPE, p);
       (void)w.poll();
     }
     allocations = scope.count();
@@ -66,10 +66,9 @@ TEST(LiveModelAlloc, FramesAllocateNothingInSteadyState) {
     wire::encode(env, buf);
     frames.push_back(std::move(buf));
   }
+  const std::string topic = wire::frame_topic("left");
   auto add = [&](std::size_t k) {
-    const std::string& b = frames[k];
-    m.add("frame/left", {reinterpret_cast<const std::uint8_t*>(b.data()), b.size()},
-          static_cast<std::int64_t>(k) * 10'000'000);
+    m.add(topic, wire::bytes_of(frames[k]), static_cast<std::int64_t>(k) * 10'000'000);
   };
   for (std::size_t k = 0; k < 10; ++k)
     add(k);

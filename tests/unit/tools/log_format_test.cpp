@@ -14,6 +14,7 @@
 #include "tactile/util/clock.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/random.hpp"
+#include "tactile/wire/envelope.hpp"
 
 namespace tactile::recording {
 namespace {
@@ -28,10 +29,6 @@ struct Written {
   std::string payload;
 };
 
-std::span<const std::uint8_t> bytes(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
 // Records of varied sizes, some incompressible.
 std::vector<Written> make_records(std::size_t n, std::uint64_t seed,
                                   std::size_t max_payload = 3000) {
@@ -40,9 +37,11 @@ std::vector<Written> make_records(std::size_t n, std::uint64_t seed,
   for (std::size_t i = 0; i < n; ++i) {
     Written w;
     w.time_ns = 1'700'000'000'000'000'000 + static_cast<std::int64_t>(i) * 10'000'000;
-    w.topic = i % 3 == 0 ? "frame/left" : (i % 3 == 1 ? "event" : "raw/right");
+    w.topic = i % 3 == 0 ? wire::frame_topic("left")
+                         : (i % 3 == 1 ? wire::kEventTopic : wire::raw_topic("right"));
     w.source = i % 2 == 0 ? "tcp://127.0.0.1:5555" : "tcp://127.0.0.1:5558";
-    w.kind = w.topic.starts_with("raw/") ? v1::PAYLOAD_KIND_RAW_FRAME : v1::PAYLOAD_KIND_ENVELOPE;
+    w.kind = w.topic.starts_with(wire::kRawTopicPrefix) ? v1::PAYLOAD_KIND_RAW_FRAME
+                                                        : v1::PAYLOAD_KIND_ENVELOPE;
     w.payload.resize(rng.below(max_payload));
     for (std::size_t k = 0; k < w.payload.size(); ++k)
       w.payload[k] = static_cast<char>(k % 7 == 0 ? rng.below(256) : k % 13);
@@ -58,7 +57,7 @@ v1::LogHeader test_header() {
   h.set_note("a note");
   auto* s = h.add_sources();
   s->set_endpoint("tcp://127.0.0.1:5555");
-  s->add_topics("frame/");
+  s->add_topics(wire::kFrameTopicPrefix);
   return h;
 }
 
@@ -72,7 +71,8 @@ std::vector<std::uint64_t> write_log(const std::filesystem::path& path,
   std::vector<std::uint64_t> boundaries{w.bytes_out()};
   for (std::size_t i = 0; i < records.size(); ++i) {
     const Written& r = records[i];
-    EXPECT_EQ(w.append(r.time_ns, r.topic, r.source, r.kind, bytes(r.payload)), WriteStatus::kOk);
+    EXPECT_EQ(w.append(r.time_ns, r.topic, r.source, r.kind, wire::bytes_of(r.payload)),
+              WriteStatus::kOk);
     if ((i + 1) % records_per_frame == 0) {
       EXPECT_EQ(w.flush(), WriteStatus::kOk);
       boundaries.push_back(w.bytes_out());
@@ -131,8 +131,9 @@ TEST(LogFormat, LargeRecordsAndAutomaticFrames) {
       std::string p(static_cast<std::size_t>(300000 + i * 1000), '\0');
       for (auto& c : p)
         c = static_cast<char>(rng.below(256));
-      ASSERT_EQ(w.append(i, "raw/left", "s", v1::PAYLOAD_KIND_RAW_FRAME, bytes(p)),
-                WriteStatus::kOk);
+      ASSERT_EQ(
+          w.append(i, wire::raw_topic("left"), "s", v1::PAYLOAD_KIND_RAW_FRAME, wire::bytes_of(p)),
+          WriteStatus::kOk);
       // Each record is larger than a frame: it is written at once, alone.
       EXPECT_EQ(w.buffered_bytes(), 0U);
       payloads.push_back(std::move(p));
@@ -274,7 +275,8 @@ TEST(LogFormat, HeaderIsOnDiskBeforeAnyRecordAndRecordsAfterTheFlushInterval) {
   EXPECT_GT(header_size, 0U);
   { LogReader r(path); }
   const std::string payload = "payload";
-  ASSERT_EQ(w.append(1, "event", "s", v1::PAYLOAD_KIND_ENVELOPE, bytes(payload)), WriteStatus::kOk);
+  ASSERT_EQ(w.append(1, wire::kEventTopic, "s", v1::PAYLOAD_KIND_ENVELOPE, wire::bytes_of(payload)),
+            WriteStatus::kOk);
   ASSERT_EQ(w.poll(), WriteStatus::kOk);
   EXPECT_EQ(std::filesystem::file_size(path), header_size);  // still buffered
   // Poll until the interval has passed (bounded); then the frame is on disk.

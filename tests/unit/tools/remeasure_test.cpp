@@ -47,7 +47,8 @@ RecordedRun make_run(int n) {
   raw.set_kind(v1::RAW_FRAME_KIND_REFERENCE);
   wire::fill_raw_pixels(img.view(), raw);
   wire::fill_settings(xo, *raw.mutable_settings());
-  run.reference = record("raw/left", v1::PAYLOAD_KIND_RAW_FRAME, raw.SerializeAsString());
+  run.reference =
+      record(wire::raw_topic("left"), v1::PAYLOAD_KIND_RAW_FRAME, raw.SerializeAsString());
   v1::Envelope env;
   std::string buf;
   for (int k = 0; k < n; ++k) {
@@ -66,7 +67,7 @@ RecordedRun make_run(int n) {
     wire::fill_tactile_frame("left", h, x.readings(), run.cal.mm_per_px,
                              *env.mutable_tactile_frame());
     wire::encode(env, buf);
-    run.frames.push_back(record("frame/left", v1::PAYLOAD_KIND_ENVELOPE, buf));
+    run.frames.push_back(record(wire::frame_topic("left"), v1::PAYLOAD_KIND_ENVELOPE, buf));
     raw.Clear();
     raw.set_sensor_id("left");
     raw.set_kind(v1::RAW_FRAME_KIND_MEASURED);
@@ -74,7 +75,8 @@ RecordedRun make_run(int n) {
     raw.set_sequence(static_cast<std::uint64_t>(k));
     raw.set_camera_timestamp_ns(k * 10'000'000LL);
     wire::fill_raw_pixels(img.view(), raw);
-    run.raws.push_back(record("raw/left", v1::PAYLOAD_KIND_RAW_FRAME, raw.SerializeAsString()));
+    run.raws.push_back(
+        record(wire::raw_topic("left"), v1::PAYLOAD_KIND_RAW_FRAME, raw.SerializeAsString()));
   }
   return run;
 }

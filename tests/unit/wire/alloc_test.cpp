@@ -32,9 +32,7 @@ TEST(WireAllocation, FillEncodeDecodeReadAllocateNothingOnceWarm) {
     h.sequence = seq;
     fill_tactile_frame(id, h, readings, cal.mm_per_px, *out.mutable_tactile_frame());
     encode(out, bytes);
-    const auto span = std::span<const std::uint8_t>(
-        reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size());
-    ASSERT_EQ(decoder.decode(span), DecodeStatus::kOk);
+    ASSERT_EQ(decoder.decode(bytes_of(bytes)), DecodeStatus::kOk);
     ASSERT_EQ(read_tactile_frame(decoder.envelope().tactile_frame(), cal, received),
               DecodeStatus::kOk);
   };
@@ -66,8 +64,7 @@ TEST(WireAllocation, PlainDecodeDoesAllocateWhichIsWhyTheDecoderExists) {
   h.status = v1::FRAME_STATUS_COMPLETE;
   fill_tactile_frame("left", h, readings, cal.mm_per_px, *out.mutable_tactile_frame());
   encode(out, bytes);
-  const auto span = std::span<const std::uint8_t>(
-      reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size());
+  const auto span = bytes_of(bytes);
   v1::Envelope in;
   decode(span, in);
   tactile::testing::AllocationScope scope;

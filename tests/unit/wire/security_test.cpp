@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "process.hpp"
+#include "tactile/wire/envelope.hpp"
 #include "tactile/wire/sockets.hpp"
 
 namespace tactile::wire {
@@ -15,15 +16,11 @@ namespace {
 
 using namespace std::chrono_literals;
 
-std::span<const std::uint8_t> bytes(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
 // Publishes until the subscriber gets a message or the attempts run out (bounded).
 bool delivered(Publisher& pub, Subscriber& sub, int attempts = 100) {
   TopicMessage m;
   for (int i = 0; i < attempts; ++i) {
-    pub.send("frame/left", bytes("payload"));
+    pub.send(frame_topic("left"), bytes_of("payload"));
     if (sub.receive(m, 10ms)) return true;
   }
   return false;
@@ -40,19 +37,19 @@ TEST(Curve, SubscriberTakesDataOnlyFromThePublisherWhoseKeyItKnows) {
   const ClientSecurity hand{generate_keypair(), sensor.keys.public_z85};
 
   Publisher good(ctx, "tcp://127.0.0.1:*", &sensor);
-  Subscriber sub(ctx, {good.endpoint()}, {"frame/"}, &hand);
+  Subscriber sub(ctx, {good.endpoint()}, {kFrameTopicPrefix}, &hand);
   EXPECT_TRUE(delivered(good, sub));
 
   // A publisher with another key, where the subscriber connects: the handshake fails.
   Publisher bad(ctx, "tcp://127.0.0.1:*", &intruder);
-  Subscriber fooled(ctx, {bad.endpoint()}, {"frame/"}, &hand);
+  Subscriber fooled(ctx, {bad.endpoint()}, {kFrameTopicPrefix}, &hand);
   EXPECT_FALSE(delivered(bad, fooled, 50));
   // A publisher without CURVE: nothing either.
   Publisher plain(ctx, "tcp://127.0.0.1:*");
-  Subscriber strict(ctx, {plain.endpoint()}, {"frame/"}, &hand);
+  Subscriber strict(ctx, {plain.endpoint()}, {kFrameTopicPrefix}, &hand);
   EXPECT_FALSE(delivered(plain, strict, 50));
   // And a subscriber without keys gets nothing from a secured publisher.
-  Subscriber outsider(ctx, {good.endpoint()}, {"frame/"});
+  Subscriber outsider(ctx, {good.endpoint()}, {kFrameTopicPrefix});
   EXPECT_FALSE(delivered(good, outsider, 50));
 }
 
@@ -66,22 +63,22 @@ TEST(Curve, RouterTakesCommandsOnlyFromAuthorizedClients) {
 
   const ClientSecurity stranger{stranger_keys, arm_keys.public_z85};
   Dealer intruder(ctx, arm.endpoint(), &stranger);
-  intruder.send(bytes("stop everything"));
+  intruder.send(bytes_of("stop everything"));
   std::string peer;
   std::vector<std::uint8_t> payload;
   EXPECT_FALSE(arm.receive(peer, payload, 500ms));
   EXPECT_GE(arm.refused_clients(), 1U);
 
   Dealer no_keys(ctx, arm.endpoint());
-  no_keys.send(bytes("hello"));
+  no_keys.send(bytes_of("hello"));
   EXPECT_FALSE(arm.receive(peer, payload, 300ms));
 
   const ClientSecurity hand{hand_keys, arm_keys.public_z85};
   Dealer client(ctx, arm.endpoint(), &hand);
-  ASSERT_TRUE(client.send(bytes("command")));
+  ASSERT_TRUE(client.send(bytes_of("command")));
   ASSERT_TRUE(arm.receive(peer, payload, 2000ms));
   EXPECT_EQ(std::string(payload.begin(), payload.end()), "command");
-  ASSERT_TRUE(arm.send(peer, bytes("state")));
+  ASSERT_TRUE(arm.send(peer, bytes_of("state")));
   ASSERT_TRUE(client.receive(payload, 2000ms));
   EXPECT_EQ(std::string(payload.begin(), payload.end()), "state");
 }

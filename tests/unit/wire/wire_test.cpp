@@ -69,8 +69,7 @@ TEST(Envelope, RoundTrip) {
   std::string bytes;
   encode(env, bytes);
   v1::Envelope back;
-  ASSERT_EQ(decode({reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()}, back),
-            DecodeStatus::kOk);
+  ASSERT_EQ(decode(bytes_of(bytes), back), DecodeStatus::kOk);
   EXPECT_EQ(back.schema_version(), kSchemaVersion);
   ASSERT_TRUE(back.has_tactile_frame());
   EXPECT_EQ(back.tactile_frame().sensor_id(), "left");
@@ -86,19 +85,17 @@ TEST(Envelope, RefusesWhatItCannotTrust) {
   std::string v2;
   env.SerializeToString(&v2);
   v1::Envelope out;
-  const auto span = [](const std::string& s) {
-    return std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(s.data()), s.size());
-  };
-  EXPECT_EQ(decode(span(v2), out), DecodeStatus::kWrongVersion);
-  EXPECT_EQ(decode(span(std::string("\xff\xff\xff\xff garbage", 12)), out),
+  EXPECT_EQ(decode(bytes_of(v2), out), DecodeStatus::kWrongVersion);
+  EXPECT_EQ(decode(bytes_of(std::string("\xff\xff\xff\xff garbage", 12)), out),
             DecodeStatus::kMalformed);
-  EXPECT_EQ(decode(span(bytes.substr(0, bytes.size() - 1)), out), DecodeStatus::kMalformed);
+  EXPECT_EQ(decode(bytes_of(bytes.substr(0, bytes.size() - 1)), out), DecodeStatus::kMalformed);
   v1::Envelope empty;
   std::string empty_bytes;
   encode(empty, empty_bytes);
-  EXPECT_EQ(decode(span(empty_bytes), out), DecodeStatus::kEmpty);
-  EXPECT_EQ(decode(span(std::string(kMaxMessageBytes + 1, '\0')), out), DecodeStatus::kTooLarge);
-  EXPECT_EQ(decode(span(bytes), out), DecodeStatus::kOk);
+  EXPECT_EQ(decode(bytes_of(empty_bytes), out), DecodeStatus::kEmpty);
+  EXPECT_EQ(decode(bytes_of(std::string(kMaxMessageBytes + 1, '\0')), out),
+            DecodeStatus::kTooLarge);
+  EXPECT_EQ(decode(bytes_of(bytes), out), DecodeStatus::kOk);
 }
 
 TEST(TactileFrame, ReadingsSurviveTheWire) {
@@ -346,33 +343,55 @@ TEST(Event, FillsEveryField) {
   EXPECT_EQ(msg.answers(0).sequence(), 500U);
 }
 
-// --- sockets: real ZeroMQ, loopback TCP and inproc -----------------------------------------
+// --- the topics -----------------------------------------------------------------------------
 
-std::span<const std::uint8_t> bytes_of(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+// Recorded logs, tools/python and users' subscriptions spell these names: they are fixed.
+TEST(Topics, NamesOnTheWireAreFixed) {
+  EXPECT_EQ(frame_topic("left"), "frame/left");
+  EXPECT_EQ(stats_topic("left"), "stats/left");
+  EXPECT_EQ(raw_topic("right"), "raw/right");
+  EXPECT_STREQ(kEventTopic, "event");
+  EXPECT_STREQ(kCommandTopic, "command");
+  EXPECT_STREQ(kArmTopic, "arm");
+  EXPECT_STREQ(kTruthTopic, "truth");
+  // A prefix subscription to a kind receives each sensor's topic of that kind.
+  EXPECT_TRUE(frame_topic("right").starts_with(kFrameTopicPrefix));
+  EXPECT_TRUE(stats_topic("right").starts_with(kStatsTopicPrefix));
+  EXPECT_TRUE(raw_topic("left").starts_with(kRawTopicPrefix));
 }
+
+TEST(Topics, BytesOfViewsTheStringItself) {
+  const std::string s("a\0b", 3);
+  const std::span<const std::uint8_t> b = bytes_of(s);
+  EXPECT_EQ(static_cast<const void*>(b.data()), static_cast<const void*>(s.data()));
+  ASSERT_EQ(b.size(), 3U);
+  EXPECT_EQ(b[1], 0U);
+  EXPECT_EQ(b[2], 'b');
+}
+
+// --- sockets: real ZeroMQ, loopback TCP and inproc -----------------------------------------
 
 TEST(Sockets, PublishSubscribeOverTcp) {
   zmq::context_t ctx;
   Publisher pub(ctx, "tcp://127.0.0.1:*");
   const std::string endpoint = pub.endpoint();
   ASSERT_NE(endpoint.find("tcp://127.0.0.1:"), std::string::npos);
-  Subscriber sub(ctx, {endpoint}, {"frame/"});
+  Subscriber sub(ctx, {endpoint}, {kFrameTopicPrefix});
   TopicMessage msg;
   // A subscription takes a moment to reach the publisher: publish until one arrives (bounded).
   bool got = false;
   for (int i = 0; i < 200 && !got; ++i) {
-    pub.send("event", bytes_of("not subscribed"));
-    pub.send("frame/left", bytes_of("hello"));
+    pub.send(kEventTopic, bytes_of("not subscribed"));
+    pub.send(frame_topic("left"), bytes_of("hello"));
     got = sub.receive(msg, 10ms);
   }
   ASSERT_TRUE(got);
-  EXPECT_EQ(msg.topic, "frame/left");
+  EXPECT_EQ(msg.topic, frame_topic("left"));
   EXPECT_EQ(std::string(msg.payload.begin(), msg.payload.end()), "hello");
   // Only subscribed topics arrive.
   for (int i = 0; i < 20; ++i) {
     if (sub.receive(msg, 5ms)) {
-      EXPECT_EQ(msg.topic, "frame/left");
+      EXPECT_EQ(msg.topic, frame_topic("left"));
     }
   }
 }

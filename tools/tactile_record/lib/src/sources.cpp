@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "tactile/wire/sockets.hpp"
+
 namespace tactile::recording {
 
 CurveSource parse_curve_source(const std::string& text) {
@@ -53,21 +55,7 @@ Sources::Sources(zmq::context_t& ctx, const SourceOptions& o) : topics_(o.topics
 }
 
 bool Sources::try_receive(std::size_t i, Message& out) {
-  zmq::socket_t& s = sockets_[i];
-  if (!s.recv(out.topic, zmq::recv_flags::dontwait)) return false;
-  if (!out.topic.more()) {
-    ++malformed_;
-    return false;
-  }
-  if (!s.recv(out.payload, zmq::recv_flags::dontwait)) return false;
-  if (out.payload.more()) {
-    zmq::message_t rest;
-    while (s.get(zmq::sockopt::rcvmore)) {
-      if (!s.recv(rest, zmq::recv_flags::dontwait)) break;
-    }
-    ++malformed_;
-    return false;
-  }
+  if (!wire::receive_pair(sockets_[i], out.topic, out.payload, malformed_)) return false;
   out.source = i;
   return true;
 }

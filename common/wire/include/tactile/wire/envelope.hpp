@@ -1,17 +1,48 @@
 #pragma once
 
-// Encoding and decoding of the one message type that crosses every socket: tactile.v1.Envelope.
+// The wire contract: the topics every PUB socket sends on, the one message type that crosses
+// every socket (tactile.v1.Envelope) with its encoding and decoding, and the byte view the
+// sockets take.
 #include <google/protobuf/arena.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "tactile/v1/tactile.pb.h"
 
 namespace tactile::wire {
+
+// Topics: the first part of every [topic, payload] message a Publisher sends. A Subscriber
+// subscribes by prefix, so a prefix below receives every sensor's messages of its kind.
+// sensor_node, one TactileFrame Envelope per camera frame: "frame/<sensor_id>".
+inline constexpr const char* kFrameTopicPrefix = "frame/";
+// sensor_node, a SensorStats Envelope now and then: "stats/<sensor_id>".
+inline constexpr const char* kStatsTopicPrefix = "stats/";
+// sensor_node with raw frames on, a tactile.v1.RawFrame (not an Envelope; raw_frame.hpp):
+// "raw/<sensor_id>".
+inline constexpr const char* kRawTopicPrefix = "raw/";
+// hand_node's events endpoint: an Event Envelope per controller event,
+inline constexpr const char* kEventTopic = "event";
+// a copy of every ArmCommand Envelope it sends the arm,
+inline constexpr const char* kCommandTopic = "command";
+// and every ArmState Envelope it receives from the arm (the arm link is point to point).
+inline constexpr const char* kArmTopic = "arm";
+// The rig, a GroundTruth Envelope per rendered frame.
+inline constexpr const char* kTruthTopic = "truth";
+
+std::string frame_topic(std::string_view sensor_id);
+std::string stats_topic(std::string_view sensor_id);
+std::string raw_topic(std::string_view sensor_id);
+
+// The bytes of an encoded message (encode()'s buffer, a log record's payload) as the sockets,
+// the decoders and the log writer take them: a view, valid while `s` is.
+inline std::span<const std::uint8_t> bytes_of(std::string_view s) noexcept {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
 
 inline constexpr std::uint32_t kSchemaVersion = 1;
 // Larger messages are refused before parsing (a TactileFrame of 41 elements is about 4 KiB).

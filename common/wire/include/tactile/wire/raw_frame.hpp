@@ -2,7 +2,8 @@
 
 // Raw camera frames on the wire and in logs (tactile.v1.RawFrame, docs/recording.md): conversion
 // between an image view and the message, and between ExtractorOptions and the settings a
-// REFERENCE frame carries. Pure functions: no sockets, no clocks.
+// REFERENCE frame carries. Pure functions: no sockets, no clocks. Their topic: raw_topic() in
+// envelope.hpp.
 #include <string>
 #include <vector>
 
@@ -11,9 +12,6 @@
 #include "tactile/v1/log.pb.h"
 
 namespace tactile::wire {
-
-// Topic prefix of raw frames: "raw/<sensor_id>".
-inline constexpr const char* kRawTopicPrefix = "raw/";
 
 // Copies the view's pixels and geometry into `out` (rows packed, 16-bit little-endian), reusing
 // its buffers: no allocation once `out.pixels` has grown to the frame's size.

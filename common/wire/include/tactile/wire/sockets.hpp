@@ -22,7 +22,18 @@ namespace tactile::wire {
 unsigned poll_readable(std::span<zmq::socket_ref> sockets, std::chrono::milliseconds timeout,
                        int wake_fd = -1);
 
-// PUB side of a tactile, event or ground-truth stream.
+// The bytes of a received message part: bytes_of in envelope.hpp, for ZeroMQ's messages.
+inline std::span<const std::uint8_t> bytes_of(const zmq::message_t& m) noexcept {
+  return {m.data<std::uint8_t>(), m.size()};
+}
+
+// Takes one queued [first, second] message without waiting, into the caller's messages (reused
+// from call to call). False when nothing is queued, and when the message has another shape: then
+// all its parts are dropped and counted in `malformed`. Never throws for a message's shape.
+bool receive_pair(zmq::socket_ref socket, zmq::message_t& first, zmq::message_t& second,
+                  std::uint64_t& malformed);
+
+// PUB side of a tactile, event or ground-truth stream (topics: envelope.hpp).
 class Publisher {
  public:
   // With `security`, a CURVE server: only subscribers that know its public key receive.
