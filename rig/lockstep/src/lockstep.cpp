@@ -418,8 +418,9 @@ std::string report_json(const Report& r) {
     return ordered_json{{"precision", precision}, {"recall", recall}};
   };
   ordered_json slip = precision_recall(r.slip.precision, r.slip.recall);
-  slip["latency_frames_p50"] = r.slip.latency_frames_p50;
-  slip["latency_frames_p99"] = r.slip.latency_frames_p99;
+  // Nearest-rank percentiles of whole frame counts: whole numbers, written as integers.
+  slip["latency_frames_p50"] = std::llround(r.slip.latency_frames_p50);
+  slip["latency_frames_p99"] = std::llround(r.slip.latency_frames_p99);
   slip["true_positives"] = r.slip.true_positives;
   slip["false_positives"] = r.slip.false_positives;
   slip["false_negatives"] = r.slip.false_negatives;
