@@ -7,19 +7,10 @@
 #include <cstdint>
 
 #include "tactile/control/config.hpp"
+#include "tactile/control/segment_runner.hpp"
 #include "tactile/control/types.hpp"
 
 namespace tactile::control {
-
-// Segment ids handed out by the controller, shared by both sequencers so that an id is never
-// reused within a task (the arm reports the id of the segment it is running).
-class SegmentIds {
- public:
-  std::uint32_t take() noexcept { return next_++; }
-
- private:
-  std::uint32_t next_ = 1;
-};
 
 struct StepInput {
   const std::array<FingertipInput, kFingertips>& fingertips;
