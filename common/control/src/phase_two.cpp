@@ -39,7 +39,7 @@ void PhaseTwoSequencer::enter(Phase p, const StepInput& in, SegmentIds& ids,
           ids, out);
       break;
     case Phase::kTwistFinish:
-      if (tight_cycle_ != 0) {
+      if (tight()) {
         // Stop turning at once.
         seq_.hold_then_open(out);
       } else {
@@ -116,11 +116,11 @@ void PhaseTwoSequencer::returned(const StepInput& in, SegmentIds& ids, StepOutpu
 }
 
 // Hold, open, then RETREAT; or, after the cycle cap, RETREAT alone.
-void PhaseTwoSequencer::finish(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept {
+void PhaseTwoSequencer::let_go(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept {
   if (seq_.released(in.t, out)) {
     retreat(in, ids, out);
   } else if (seq_.segment_done(in, out)) {
-    if (tight_cycle_ != 0) {
+    if (tight()) {
       seq_.finish();
     } else {
       seq_.abort("no tightness detected within max_twist_cycles", out);
@@ -146,7 +146,7 @@ void PhaseTwoSequencer::step(const StepInput& in, SegmentIds& ids, StepOutput& o
       if (seq_.segment_done(in, out)) returned(in, ids, out);
       break;
     case Phase::kTwistFinish:
-      finish(in, ids, out);
+      let_go(in, ids, out);
       break;
     default:
       break;

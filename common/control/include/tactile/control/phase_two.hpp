@@ -40,10 +40,11 @@ class PhaseTwoSequencer {
   void begin_cycle(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
   void turn(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
   void returned(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
-  void finish(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
+  void let_go(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
   void retreat(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
   // Which tightening rule the current turn meets; nullptr while none does.
   const char* tightness() const;
+  bool tight() const { return tight_cycle_ != 0; }
   double turned_yaw() const;
 
   Config cfg_;
