@@ -64,7 +64,7 @@ class Sequencer {
   // Stop the arm now, open on the next update.
   void hold_then_open(StepOutput& out) noexcept { out.command = release_.hold(); }
   void open(double t, StepOutput& out) noexcept { out.command = release_.open(t); }
-  // The release has run its course.
+  // Sends the open that follows hold_then_open; true once, when the open has run its course.
   bool released(double t, StepOutput& out) noexcept { return release_.update(t, out.command); }
 
   // SEARCH while the grasp searches; MOVE while it settles and while a segment carries the
