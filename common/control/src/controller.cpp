@@ -165,8 +165,8 @@ ControllerOutput GraspMoveTwistController::update(const ControllerInput& in) noe
     phase_ = current_phase();
     out.phase = phase_;
     out.flags.slip = false;
-    out.flags.fingertip[0].slip = false;
-    out.flags.fingertip[1].slip = false;
+    for (FingertipFlags& f : out.flags.fingertip)
+      f.slip = false;
     out.flags.search = out.flags.move = false;
     return out;
   }

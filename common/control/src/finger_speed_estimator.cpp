@@ -64,8 +64,9 @@ FingerSpeedOutput FingerSpeedEstimator::update(
     mode_ = mode;
     touched_.fill(false);
     recompress_until_.fill(kNever);
-    if (action_[0] == FingerAction::kRecompress) action_[0] = FingerAction::kHold;
-    if (action_[1] == FingerAction::kRecompress) action_[1] = FingerAction::kHold;
+    for (FingerAction& a : action_) {
+      if (a == FingerAction::kRecompress) a = FingerAction::kHold;
+    }
   }
 
   FingerSpeedOutput out;

@@ -9,9 +9,6 @@
 //
 // Slips during LIFT, TRANSPORT and LOWER are answered by the finger speed estimator (MOVE mode)
 // with re-compression; this class only decides the steps.
-#include <array>
-#include <cstdint>
-
 #include "tactile/control/config.hpp"
 #include "tactile/control/sequencer.hpp"
 #include "tactile/control/slip_direction.hpp"
@@ -20,7 +17,7 @@ namespace tactile::control {
 
 class PhaseOneSequencer {
  public:
-  explicit PhaseOneSequencer(const Config& cfg) : cfg_(cfg) {}
+  explicit PhaseOneSequencer(const Config& cfg) : cfg_(cfg), seq_(cfg_) {}
 
   // Enters APPROACH.
   void start(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
@@ -29,34 +26,31 @@ class PhaseOneSequencer {
   // unfinished segment again under a new id, or the interrupted open; kNone otherwise.
   Command resume(SegmentIds& ids, double t) noexcept;
 
-  Phase phase() const { return phase_; }
+  Phase phase() const { return seq_.phase(); }
   // RETRACT completed after a release: Phase I is over.
-  bool finished() const { return finished_; }
+  bool finished() const { return seq_.phase() == Phase::kDone; }
   // Where the cap was let go (the wrist when the release's open completed): Phase II's
   // reference pose.
   const WristPose& release_pose() const { return release_pose_; }
 
  private:
-  enum class Sub : std::uint8_t { kNone, kSearch, kSettle, kHolding, kOpening };
-
   void enter(Phase p, const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
-  void issue(const char* name, WristPose target, double speed, double yaw_rate, bool keep,
-             const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
-  void abort(const char* why, StepOutput& out) noexcept;
-  void event(EventKind kind, StepOutput& out, const char* text = "", double value = 0) const;
-  bool segment_timed_out(double t) const;
-  WristPose place(double x, double y, double z) const;
+  void lift(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
+  void lower(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
+  void retracted(StepOutput& out) noexcept;
+  void defer_classification_on_deadman(const StepInput& in) noexcept;
+  SlipDirection slip_direction(const StepInput& in) const;
+  MoveTo travel(const char* name, WristPose target, double speed) const;
+  MoveTo carry(const char* name, WristPose target, double speed) const;
+  WristPose above_cap(double z) const;
+  WristPose above_bottle(double z) const;
+  WristPose released_at(const ArmFeedback& arm) const;
 
   Config cfg_;
-  Phase phase_ = Phase::kIdle;
-  Sub sub_ = Sub::kNone;
-  double sub_started_s_ = 0;
+  Sequencer seq_;
   double settled_after_s_ = 0;  // no slip direction is classified before this (resume_settle_s)
-  ActiveSegment segment_;
-  std::array<bool, kFingertips> touched_{};
   bool grasp_classified_ = false;
   bool released_on_lift_ = false;
-  bool finished_ = false;
   WristPose release_pose_;
 };
 

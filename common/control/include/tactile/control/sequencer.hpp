@@ -1,25 +1,19 @@
 #pragma once
 
-// Pieces shared by the Phase I and Phase II sequencers: what a step sees, what it produces, and
-// the bookkeeping of one trajectory segment.
-#include <algorithm>
+// The skeleton both sequencers are built on (Fig. 7 and Fig. 8 share it): the current step and
+// its events, the one trajectory segment, the grasp and the gentle release a step runs, ABORTED,
+// the finger mode that follows from them, and the resume after a stale hold. A phase sequencer
+// keeps only its own transitions: which step comes next and what each step starts.
 #include <array>
 #include <cstdint>
 
 #include "tactile/control/config.hpp"
+#include "tactile/control/gentle_release.hpp"
+#include "tactile/control/grasp_search.hpp"
+#include "tactile/control/segment_runner.hpp"
 #include "tactile/control/types.hpp"
 
 namespace tactile::control {
-
-// Segment ids handed out by the controller, shared by both sequencers so that an id is never
-// reused within a task (the arm reports the id of the segment it is running).
-class SegmentIds {
- public:
-  std::uint32_t take() noexcept { return next_++; }
-
- private:
-  std::uint32_t next_ = 1;
-};
 
 struct StepInput {
   const std::array<FingertipInput, kFingertips>& fingertips;
@@ -34,24 +28,63 @@ struct StepOutput {
   FingerMode finger_mode = FingerMode::kOff;
 };
 
-// The segment a step waits for.
-struct ActiveSegment {
-  bool active = false;
-  MoveTo move;
-  double started_s = 0;
+class Sequencer {
+ public:
+  explicit Sequencer(const Config& cfg) noexcept
+      : segment_(cfg.segment_timeout_s),
+        grasp_(cfg.search_timeout_s, cfg.grasp_settle_s),
+        release_(cfg) {}
 
-  bool done(const ArmFeedback& arm) const {
-    return active && arm.active_segment_id == move.segment_id && arm.segment_done;
-  }
+  // A new run: idle, nothing running, cycle 0.
+  void restart() noexcept;
+  // A new step (its PHASE event): whatever the previous one ran is over.
+  void enter(Phase p, StepOutput& out) noexcept;
+  // The phase is over (kDone); DONE is the controller's to say.
+  void finish() noexcept;
+  // ABORTED (`why` a literal), Stop, the fingers off.
+  void abort(const char* why, StepOutput& out) noexcept;
+  // Phase II's twist cycles; every event carries the current one (0 before the first).
+  std::uint32_t next_cycle() noexcept { return ++cycle_; }
+
+  // `e` in the current step and cycle.
+  void event(Event e, StepOutput& out) const;
+  void event(EventKind kind, StepOutput& out, const char* text, double value = 0) const;
+
+  // Sends `move` (a new id), with the segment timeout from now.
+  void move(const MoveTo& move, double t, SegmentIds& ids, StepOutput& out) noexcept;
+  // The segment is done. Not done within segment_timeout_s: ABORTED.
+  bool segment_done(const StepInput& in, StepOutput& out) noexcept;
+
+  // SEARCH from t.
+  void search(double t) noexcept { grasp_.start(t); }
+  // TOUCH when both fingertips have touched; true when the grasp has settled. Search timed out:
+  // ABORTED.
+  bool grasp_settled(const StepInput& in, StepOutput& out) noexcept;
+
+  // Stop the arm now, open on the next update.
+  void hold_then_open(StepOutput& out) noexcept { out.command = release_.hold(); }
+  void open(double t, StepOutput& out) noexcept { out.command = release_.open(t); }
+  // Sends the open that follows hold_then_open; true once, when the open has run its course.
+  bool released(double t, StepOutput& out) noexcept { return release_.update(t, out.command); }
+
+  // SEARCH while the grasp searches; MOVE while it settles and while a segment carries the
+  // object; otherwise off.
+  FingerMode finger_mode() const;
+  // The command that continues the step after a stale hold stopped the arm: the interrupted
+  // open for the distance it had left, or the unfinished segment under a new id; kNone otherwise.
+  Command resume(SegmentIds& ids, double t) noexcept;
+
+  Phase phase() const { return phase_; }
+  std::uint32_t cycle() const { return cycle_; }
+
+ private:
+  void clear() noexcept;
+
+  Phase phase_ = Phase::kIdle;
+  std::uint32_t cycle_ = 0;
+  SegmentRunner segment_;
+  GraspSearch grasp_;
+  GentleRelease release_;
 };
-
-// The open that carries on after a stale hold stopped one that had run for `elapsed_s` (task
-// time, which stale holds do not advance): only the distance it had left, so that holds never
-// add up to a wider open. kNone when it had finished its stroke.
-inline Command resume_open(const Config& cfg, double elapsed_s) noexcept {
-  const double left = cfg.open_distance_m - cfg.open_speed_mps * std::max(elapsed_s, 0.0);
-  if (!(left > 0)) return Command::none();
-  return Command::open_fingers({cfg.open_speed_mps, left});
-}
 
 }  // namespace tactile::control
