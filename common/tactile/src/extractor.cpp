@@ -504,23 +504,116 @@ bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x
   return std::isfinite(x) && std::isfinite(y);
 }
 
+namespace {
+
+// The weights of the first centroid, the one every estimator starts from.
+detail::MomentKind start_moments(CentroidEstimator e) noexcept {
+  switch (e) {
+    case CentroidEstimator::kPlain:
+      return detail::MomentKind::kPlain;
+    case CentroidEstimator::kThresholded:
+      return detail::MomentKind::kThresholded;
+    case CentroidEstimator::kWindowed:
+      return detail::MomentKind::kThresholdedCount;
+    case CentroidEstimator::kGaussian:
+      return detail::MomentKind::kStart;
+  }
+  return detail::MomentKind::kThresholded;
+}
+
+}  // namespace
+
+template <typename Pixel>
+void Extractor::gaussian_refine(std::size_t element, const ImageView& f, const detail::Moments& m,
+                                double g, Vec2& p) noexcept {
+  const ElementCalibration& ec = cal_.elements[element];
+  // Width of the weight from the spot: for a Gaussian of peak A above a floor f,
+  // G = 2 pi sigma^2 (A - f - f ln(A / f)). The peak increment is the largest excess over
+  // the threshold (whole gray levels) plus the floor.
+  const double fl = cal_.noise_floor;
+  const double peak = m.peak > 0 ? m.peak + fl : 0.0;
+  const double shape = fl > 0 ? peak - fl - fl * std::log(std::max(peak / fl, 1.0)) : peak;
+  double sigma = shape > 0.05 * peak && shape > 0 ? std::sqrt(g / (2 * std::numbers::pi * shape))
+                                                  : ec.radius_px / 4;
+  sigma = std::clamp(sigma, 0.6, std::max(0.6, ec.radius_px / 2));
+  double gx = p.x;
+  double gy = p.y;
+  const double sigma_before = sigma;
+  if (!gaussian_pass<Pixel>(element, f, gx, gy, sigma)) return;
+  // A weight far from the spot's width loses efficiency: once more with the better width.
+  if (std::abs(sigma - sigma_before) > 0.25 * sigma_before) {
+    sigma = std::clamp(sigma, 0.6, std::max(0.6, ec.radius_px / 2));
+    double hx = p.x;
+    double hy = p.y;
+    if (gaussian_pass<Pixel>(element, f, hx, hy, sigma)) {
+      gx = hx;
+      gy = hy;
+    }
+  }
+  // Keep the estimate only inside the disk; the thresholded centroid always is.
+  const double dx = gx - ec.center_px.x;
+  const double dy = gy - ec.center_px.y;
+  if (dx * dx + dy * dy <= ec.radius_px * ec.radius_px) p = {gx, gy};
+}
+
+template <typename Pixel>
+Vec2 Extractor::centroid(std::size_t element, const ImageView& f, const detail::Moments& m,
+                         double g) noexcept {
+  const detail::Block& blk = blocks_[element];
+  Vec2 p{blk.x0 + static_cast<double>(m.cx) / static_cast<double>(m.c0),
+         blk.y0 + static_cast<double>(m.cy) / static_cast<double>(m.c0)};
+  switch (opt_.estimator) {
+    case CentroidEstimator::kPlain:
+    case CentroidEstimator::kThresholded:
+      break;
+    case CentroidEstimator::kWindowed: {
+      const double half =
+          std::sqrt(static_cast<double>(m.above) / std::numbers::pi) + opt_.window_margin_px;
+      windowed_pass<Pixel>(layout_[element], f, p.x, p.y, half);
+      break;
+    }
+    case CentroidEstimator::kGaussian:
+      gaussian_refine<Pixel>(element, f, m, g, p);
+      break;
+  }
+  return p;
+}
+
+inline void Extractor::record_contact(std::size_t element, Vec2 p, double g,
+                                      std::uint32_t gap) noexcept {
+  const double mm = cal_.mm_per_px;
+  const ElementCalibration& ec = cal_.elements[element];
+  ElementState& st = state_[element];
+  ElementReading& r = readings_[element];
+  r.x_px = p.x;
+  r.y_px = p.y;
+  r.ux_mm = (p.x - ec.zero_px.x) * mm;
+  r.uy_mm = (p.y - ec.zero_px.y) * mm;
+  r.fz = cal_.normal_curve(g);
+  r.fx = cal_.shear_curve.odd(r.ux_mm);
+  r.fy = cal_.shear_curve.odd(r.uy_mm);
+  if (st.contact && gap > 0) {
+    r.has_displacement = true;
+    r.dx_mm = (p.x - st.x_px) * mm / gap;
+    r.dy_mm = (p.y - st.y_px) * mm / gap;
+  }
+  st.contact = true;
+  st.x_px = p.x;
+  st.y_px = p.y;
+}
+
 template <typename Pixel>
 void Extractor::measure_all(const ImageView& f, std::uint32_t gap) noexcept {
-  const double mm = cal_.mm_per_px;
   const detail::FrameRef fr = frame_ref(f);
   const detail::BlockData data = block_data();
-  const bool plain = opt_.estimator == CentroidEstimator::kPlain;
-  const bool windowed = opt_.estimator == CentroidEstimator::kWindowed;
-  const bool gaussian = opt_.estimator == CentroidEstimator::kGaussian;
+  const detail::MomentKind kind = start_moments(opt_.estimator);
   for (std::size_t i = 0; i < layout_.size(); ++i) {
-    const ElementLayout& el = layout_[i];
-    const ElementCalibration& ec = cal_.elements[i];
     ElementState& st = state_[i];
     ElementReading& r = readings_[i];
     const detail::Block& blk = blocks_[i];
 
     r = ElementReading{};
-    r.id = ec.id;
+    r.id = cal_.elements[i].id;
     // An element out of contact first gets its exact G on narrow integers, about the cost of
     // reading its pixels; only if that reaches contact.on does it get the full pass.
     if (!st.contact) {
@@ -533,10 +626,6 @@ void Extractor::measure_all(const ImageView& f, std::uint32_t gap) noexcept {
         continue;
       }
     }
-    const detail::MomentKind kind = plain      ? detail::MomentKind::kPlain
-                                    : windowed ? detail::MomentKind::kThresholdedCount
-                                    : gaussian ? detail::MomentKind::kStart
-                                               : detail::MomentKind::kThresholded;
     const detail::Moments m = sizeof(Pixel) == 1 ? kernels_->moments_u8(blk, fr, data, kind)
                                                  : kernels_->moments_u16(blk, fr, data, kind);
     // The next element's rows start loading while this one is worked on (about a tenth of the
@@ -551,61 +640,7 @@ void Extractor::measure_all(const ImageView& f, std::uint32_t gap) noexcept {
       st = ElementState{};
       continue;
     }
-    double x = blk.x0 + static_cast<double>(m.cx) / static_cast<double>(m.c0);
-    double y = blk.y0 + static_cast<double>(m.cy) / static_cast<double>(m.c0);
-    if (windowed) {
-      const double half =
-          std::sqrt(static_cast<double>(m.above) / std::numbers::pi) + opt_.window_margin_px;
-      windowed_pass<Pixel>(el, f, x, y, half);
-    } else if (gaussian) {
-      // Width of the weight from the spot: for a Gaussian of peak A above a floor f,
-      // G = 2 pi sigma^2 (A - f - f ln(A / f)). The peak increment is the largest excess over
-      // the threshold (whole gray levels) plus the floor.
-      const double fl = cal_.noise_floor;
-      const double peak = m.peak > 0 ? m.peak + fl : 0.0;
-      const double shape = fl > 0 ? peak - fl - fl * std::log(std::max(peak / fl, 1.0)) : peak;
-      double sigma = shape > 0.05 * peak && shape > 0
-                         ? std::sqrt(g / (2 * std::numbers::pi * shape))
-                         : ec.radius_px / 4;
-      sigma = std::clamp(sigma, 0.6, std::max(0.6, ec.radius_px / 2));
-      double gx = x;
-      double gy = y;
-      const double sigma_before = sigma;
-      if (gaussian_pass<Pixel>(i, f, gx, gy, sigma)) {
-        // A weight far from the spot's width loses efficiency: once more with the better width.
-        if (std::abs(sigma - sigma_before) > 0.25 * sigma_before) {
-          sigma = std::clamp(sigma, 0.6, std::max(0.6, ec.radius_px / 2));
-          double hx = x;
-          double hy = y;
-          if (gaussian_pass<Pixel>(i, f, hx, hy, sigma)) {
-            gx = hx;
-            gy = hy;
-          }
-        }
-        // Keep the estimate only inside the disk; the thresholded centroid always is.
-        const double dx = gx - ec.center_px.x;
-        const double dy = gy - ec.center_px.y;
-        if (dx * dx + dy * dy <= ec.radius_px * ec.radius_px) {
-          x = gx;
-          y = gy;
-        }
-      }
-    }
-    r.x_px = x;
-    r.y_px = y;
-    r.ux_mm = (x - ec.zero_px.x) * mm;
-    r.uy_mm = (y - ec.zero_px.y) * mm;
-    r.fz = cal_.normal_curve(g);
-    r.fx = cal_.shear_curve.odd(r.ux_mm);
-    r.fy = cal_.shear_curve.odd(r.uy_mm);
-    if (st.contact && gap > 0) {
-      r.has_displacement = true;
-      r.dx_mm = (x - st.x_px) * mm / gap;
-      r.dy_mm = (y - st.y_px) * mm / gap;
-    }
-    st.contact = true;
-    st.x_px = x;
-    st.y_px = y;
+    record_contact(i, centroid<Pixel>(i, f, m, g), g, gap);
   }
 }
 

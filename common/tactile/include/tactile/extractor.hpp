@@ -8,6 +8,7 @@
 
 #include "tactile/calibration.hpp"
 #include "tactile/detail/span.hpp"
+#include "tactile/geometry.hpp"
 #include "tactile/image.hpp"
 #include "tactile/reading.hpp"
 
@@ -16,6 +17,7 @@ namespace tactile {
 namespace detail {
 struct KernelSet;
 struct BlockData;
+struct Moments;
 }  // namespace detail
 
 // How the centroid (x_G, y_G) of a spot is estimated. All use the same increments
@@ -147,6 +149,13 @@ class Extractor {
   template <typename Pixel>
   bool gaussian_pass(std::size_t element, const ImageView& f, double& x, double& y,
                      double& sigma) noexcept;
+  template <typename Pixel>
+  void gaussian_refine(std::size_t element, const ImageView& f, const detail::Moments& m, double g,
+                       Vec2& p) noexcept;
+  template <typename Pixel>
+  Vec2 centroid(std::size_t element, const ImageView& f, const detail::Moments& m,
+                double g) noexcept;
+  void record_contact(std::size_t element, Vec2 p, double g, std::uint32_t gap) noexcept;
   template <typename Pixel>
   void measure_all(const ImageView& f, std::uint32_t gap) noexcept;
   void build_thresholds();
