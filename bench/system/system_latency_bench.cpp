@@ -492,16 +492,16 @@ struct PipelineResult {
   std::string rig_counters;
   Dist e2e;  // from the report: p50, p99, max; n = the commands' answers (unknown: 0)
   // Stages, in the measured window.
-  Dist gige;  // camera timestamp -> sensor_node received the frame's last packet
-  Dist gige_pair;                  // the same for the later of the two frames of each exposure
-  double steal_ms = std::nan("");  // the host's steal time over the window (all CPUs)
+  Dist gige;       // camera timestamp -> sensor_node received the frame's last packet
+  Dist gige_pair;  // the same for the later of the two frames of each exposure
+  double steal_ms = std::nan("");     // the host's steal time over the window (all CPUs)
   double io_stall_ms = std::nan("");  // every task waiting for I/O at once, over the window
   // StallProbe over the window: its latest wake-up, when, and wake-ups more than 10 ms late.
   double probe_max_late_ms = std::nan("");
   std::int64_t probe_max_at_ns = 0;
   std::uint64_t probe_stalls = 0;
   bool probe_fifo = false;
-  bool subscriber_idle = false;    // this benchmark's subscriber ran under SCHED_IDLE
+  bool subscriber_idle = false;  // this benchmark's subscriber ran under SCHED_IDLE
   // Frames received before their camera timestamp: the timestamps do not say when the frame was
   // sent (the rig renders render_lead_s before the send instant; above 1/render_lead_s frames
   // per second the fake camera sends the image a period early), so latencies are not valid.
@@ -525,7 +525,7 @@ struct PipelineResult {
   std::uint64_t commands = 0;
   std::size_t frame_bytes_p50 = 0;
   std::size_t command_bytes_p50 = 0;
-  std::map<std::string, double> cpu;  // percent of one core
+  std::map<std::string, double> cpu;           // percent of one core
   std::map<std::string, double> major_faults;  // in the window, per process
   // Slip onset (ground truth) -> re-compress command sent, whole run.
   std::vector<double> slip_to_recompress_ms;
@@ -969,10 +969,10 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
 // The transport alone
 
 struct AravisResult {
-  Dist latency;                // camera timestamp -> receive_timestamp_ns, whole frames
-  Dist latency_pair;           // the same for the later of the two frames of each exposure
+  Dist latency;                    // camera timestamp -> receive_timestamp_ns, whole frames
+  Dist latency_pair;               // the same for the later of the two frames of each exposure
   double steal_ms = std::nan("");  // the host's steal time over the window (all CPUs)
-  std::uint64_t negative = 0;  // received before the camera timestamp (see gige_negative)
+  std::uint64_t negative = 0;      // received before the camera timestamp (see gige_negative)
   std::uint64_t frames = 0;
   std::uint64_t complete = 0;
   std::uint64_t lost = 0;
@@ -1352,7 +1352,8 @@ std::string row_label(const RateResult& rr, const Settings& s) {
                     : fmt::format("{:.0f}", rr.pipe.fps);
 }
 
-void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
+// What was run, and per rate: end to end against the transport alone, and CPU.
+void print_overview(const std::vector<RateResult>& rs, const Settings& s) {
   std::printf(
       "\nTwo cameras, %.0f s measured per rate after the task started (+%.0f s warm-up); "
       "transport alone %.0f s per rate. Times in ms; CPU in %% of one core.%s\n\n",
@@ -1383,6 +1384,10 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
                 static_cast<unsigned long long>(p.frames), cpu("sensor_node").c_str(),
                 cpu("hand_node").c_str(), cpu("rig").c_str(), cpu("benchmark").c_str());
   }
+}
+
+// Frames, faults and the machine's own pauses in the window.
+void print_frames_table(const std::vector<RateResult>& rs, const Settings& s) {
   std::printf(
       "\nFrames and faults in the window (e2e samples: whole run, one per answer of every "
       "command):\n\n"
@@ -1416,6 +1421,10 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
         static_cast<unsigned long long>(p.probe_stalls), p.probe_fifo ? "" : " (not FIFO)",
         p.rig_counters.c_str());
   }
+}
+
+// Each stage of the pipeline, camera to command.
+void print_stages_table(const std::vector<RateResult>& rs, const Settings& s) {
   std::printf(
       "\nStages, p50 / p99 (ms):\n\n"
       "| fps | GigE Vision receive | (later of the exposure's two) | measurement + publish | (core "
@@ -1434,6 +1443,10 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
         pp(p.cam_to_send_all_no_hold).c_str(), static_cast<unsigned long long>(p.commands),
         static_cast<unsigned long long>(holds == p.command_kinds.end() ? 0 : holds->second));
   }
+}
+
+// The transport alone: Aravis receive and the ZeroMQ hops.
+void print_transport_table(const std::vector<RateResult>& rs, const Settings& s) {
   std::printf(
       "\nTransport alone, p50 / p99 / max (ms):\n\n"
       "| fps | Aravis receive | (later of the exposure's two) | frames (complete/received) | "
@@ -1453,6 +1466,10 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
                 ppm(z.round_trip).c_str(), ppm(z.pub_sub).c_str(), ppm(z.dealer_router).c_str(),
                 z.frame_bytes, z.command_bytes);
   }
+}
+
+// Slip onset (ground truth) -> re-compress command.
+void print_slip_table(const std::vector<RateResult>& rs, const Settings& s) {
   std::printf(
       "\nSlip onset (ground truth) -> re-compress command sent by hand_node, whole run:\n\n"
       "| fps | true slip episodes | re-compressions | with a true onset within 3 periods | without "
@@ -1471,6 +1488,10 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
                 ms(lo, 2).c_str(), ms(d.p50, 2).c_str(), ms(d.max, 2).c_str(),
                 2000.0 / p.fps + 1.0);
   }
+}
+
+// Frames that arrived before their camera timestamp make the latencies at that rate suspect.
+void print_timestamp_warnings(const std::vector<RateResult>& rs, const Settings& s) {
   for (const RateResult& rr : rs) {
     const PipelineResult& p = rr.pipe;
     const std::uint64_t ahead = p.gige_negative + (rr.aravis ? rr.aravis->negative : 0);
@@ -1490,6 +1511,10 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
               : "Rare: latencies stand, their tails slightly understated.");
     }
   }
+}
+
+// Pauses of the machine (steal, stalled wake-ups, I/O, page faults) that explain tail latencies.
+void print_machine_notes(const std::vector<RateResult>& rs, const Settings& s) {
   for (const RateResult& rr : rs) {
     const PipelineResult& p = rr.pipe;
     // One 10 ms tick of steal is common; more means the host paused this machine for a while.
@@ -1521,46 +1546,61 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
             row_label(rr, s).c_str(), k, p.major_faults.at(k));
     }
   }
-  for (const RateResult& rr : rs) {
-    const PipelineResult& p = rr.pipe;
-    if (std::abs(p.fps - 200.0) > 1e-9) continue;
-    const auto verdict = [](bool measured, bool ok) {
-      return !measured ? "not measured" : ok ? "met" : "NOT met";
-    };
+}
+
+// The targets, judged on one 200 fps run.
+void print_targets(const RateResult& rr, const Settings& s) {
+  const PipelineResult& p = rr.pipe;
+  const auto verdict = [](bool measured, bool ok) {
+    return !measured ? "not measured" : ok ? "met" : "NOT met";
+  };
+  std::printf(
+      "\nTargets (two cameras, 200 fps%s):\n\n| target | measured | verdict |\n|---|---|---|\n",
+      s.runs > 1 ? fmt::format(", run {} of {}", rr.run, s.runs).c_str() : "");
+  std::printf("| end to end p50 <= 1 ms | %s ms | %s |\n", ms(p.e2e.p50).c_str(),
+              verdict(std::isfinite(p.e2e.p50), p.e2e.p50 <= 1.0));
+  std::printf("| end to end p99 <= 3 ms (max reported) | %s ms (max %s ms) | %s |\n",
+              ms(p.e2e.p99).c_str(), ms(p.e2e.max).c_str(),
+              verdict(std::isfinite(p.e2e.p99), p.e2e.p99 <= 3.0));
+  std::smatch m;
+  long long rig_incomplete = -1;
+  const std::regex re("incomplete ([0-9]+)");
+  if (std::regex_search(p.rig_counters, m, re)) rig_incomplete = std::stoll(m[1].str());
+  std::printf("| no incomplete frames | %llu in the window; %s in the whole run (rig) | %s |\n",
+              static_cast<unsigned long long>(p.frames_incomplete),
+              rig_incomplete < 0 ? "?" : std::to_string(rig_incomplete).c_str(),
+              verdict(true, p.frames_incomplete == 0 && rig_incomplete == 0));
+  if (rr.aravis && rr.zmq) {
+    const double added = p.e2e.p50 - transport_alone_p50(rr);
     std::printf(
-        "\nTargets (two cameras, 200 fps%s):\n\n| target | measured | verdict |\n|---|---|---|\n",
-        s.runs > 1 ? fmt::format(", run {} of {}", rr.run, s.runs).c_str() : "");
-    std::printf("| end to end p50 <= 1 ms | %s ms | %s |\n", ms(p.e2e.p50).c_str(),
-                verdict(std::isfinite(p.e2e.p50), p.e2e.p50 <= 1.0));
-    std::printf("| end to end p99 <= 3 ms (max reported) | %s ms (max %s ms) | %s |\n",
-                ms(p.e2e.p99).c_str(), ms(p.e2e.max).c_str(),
-                verdict(std::isfinite(p.e2e.p99), p.e2e.p99 <= 3.0));
-    std::smatch m;
-    long long rig_incomplete = -1;
-    const std::regex re("incomplete ([0-9]+)");
-    if (std::regex_search(p.rig_counters, m, re)) rig_incomplete = std::stoll(m[1].str());
-    std::printf("| no incomplete frames | %llu in the window; %s in the whole run (rig) | %s |\n",
-                static_cast<unsigned long long>(p.frames_incomplete),
-                rig_incomplete < 0 ? "?" : std::to_string(rig_incomplete).c_str(),
-                verdict(true, p.frames_incomplete == 0 && rig_incomplete == 0));
-    if (rr.aravis && rr.zmq) {
-      const double added = p.e2e.p50 - transport_alone_p50(rr);
-      std::printf(
-          "| pipeline adds <= 0.150 ms at p50 over the transport alone | %s ms (%s ms over the "
-          "per-frame transport) | %s |\n",
-          ms(added).c_str(), ms(p.e2e.p50 - transport_alone_per_frame_p50(rr)).c_str(),
-          verdict(std::isfinite(added), added <= 0.150));
-    }
-    const bool cpu_known = p.cpu.count("sensor_node") > 0;
-    std::printf("| sensor_node <= 25 %% of one core | %s | %s |\n",
-                cpu_known ? fmt::format("{:.1f} %", p.cpu.at("sensor_node")).c_str() : "-",
-                verdict(cpu_known, cpu_known && p.cpu.at("sensor_node") <= 25.0));
-    const Dist d = dist(p.slip_to_recompress_ms);
-    std::printf("| slip onset -> re-compress command <= 2 periods + 1 ms (%.1f ms) | %s | %s |\n",
-                2000.0 / p.fps + 1.0,
-                d.n > 0 ? fmt::format("max {} ms over {}", ms(d.max, 2), d.n).c_str()
-                        : "no re-compression near a true onset",
-                verdict(d.n > 0, d.max <= 2000.0 / p.fps + 1.0));
+        "| pipeline adds <= 0.150 ms at p50 over the transport alone | %s ms (%s ms over the "
+        "per-frame transport) | %s |\n",
+        ms(added).c_str(), ms(p.e2e.p50 - transport_alone_per_frame_p50(rr)).c_str(),
+        verdict(std::isfinite(added), added <= 0.150));
+  }
+  const bool cpu_known = p.cpu.count("sensor_node") > 0;
+  std::printf("| sensor_node <= 25 %% of one core | %s | %s |\n",
+              cpu_known ? fmt::format("{:.1f} %", p.cpu.at("sensor_node")).c_str() : "-",
+              verdict(cpu_known, cpu_known && p.cpu.at("sensor_node") <= 25.0));
+  const Dist d = dist(p.slip_to_recompress_ms);
+  std::printf("| slip onset -> re-compress command <= 2 periods + 1 ms (%.1f ms) | %s | %s |\n",
+              2000.0 / p.fps + 1.0,
+              d.n > 0 ? fmt::format("max {} ms over {}", ms(d.max, 2), d.n).c_str()
+                      : "no re-compression near a true onset",
+              verdict(d.n > 0, d.max <= 2000.0 / p.fps + 1.0));
+}
+
+void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
+  print_overview(rs, s);
+  print_frames_table(rs, s);
+  print_stages_table(rs, s);
+  print_transport_table(rs, s);
+  print_slip_table(rs, s);
+  print_timestamp_warnings(rs, s);
+  print_machine_notes(rs, s);
+  for (const RateResult& rr : rs) {
+    if (std::abs(rr.pipe.fps - 200.0) > 1e-9) continue;
+    print_targets(rr, s);
   }
   if (s.runs > 1) print_runs_summary(rs, s);
   std::fflush(stdout);
