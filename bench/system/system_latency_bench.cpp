@@ -719,6 +719,55 @@ void read_rig_report(const fs::path& report, const fs::path& log_path, PipelineR
   }
 }
 
+// rig, sensor_node and hand_node as processes, started in this order, each logging to
+// dir/logs/<name>.log; the rig writes its report to dir/report.json when stopped.
+class PipelineProcesses {
+ public:
+  PipelineProcesses(const Settings& s, const Programs& prog, const fs::path& scenario,
+                    const fs::path& dir)
+      : dir_(dir),
+        report_(dir / "report.json"),
+        rig_("rig",
+             {prog.rig.string(), "--scenario", scenario.string(), "--report", report_.string(),
+              "--wait-for-hand", fmt::format("{}", s.start_timeout_s), "--log-level", "debug"},
+             dir / "logs" / "rig.log"),
+        sensor_("sensor_node",
+                {prog.sensor.string(), "--config", (dir / "config" / "sensor_node.yaml").string()},
+                dir / "logs" / "sensor_node.log"),
+        hand_("hand_node",
+              {prog.hand.string(), "--config", (dir / "config" / "hand_node.yaml").string()},
+              dir / "logs" / "hand_node.log") {}
+
+  const std::vector<Child*>& children() const { return children_; }
+  std::map<std::string, pid_t> pids() const {
+    return {{"rig", rig_.pid()},
+            {"sensor_node", sensor_.pid()},
+            {"hand_node", hand_.pid()},
+            {"benchmark", ::getpid()}};
+  }
+  bool rig_running() { return rig_.running(); }
+  [[noreturn]] void fail(const std::string& what) const { fail_run(what, children_, dir_); }
+
+  // The nodes first (a sensor_node whose cameras vanished first spends seconds giving up on
+  // them), then the rig, which writes its report on SIGINT; the report read into r.
+  void stop(double fps, PipelineResult& r) {
+    hand_.stop(milliseconds(5000));
+    sensor_.stop(milliseconds(10000));
+    const int rig_status = rig_.stop(milliseconds(10000));
+    if (rig_status != 0 || !fs::exists(report_))
+      fail(fmt::format("{:.0f} fps: the rig wrote no report (status {})", fps, rig_status));
+    read_rig_report(report_, dir_ / "logs" / "rig.log", r);
+  }
+
+ private:
+  fs::path dir_;
+  fs::path report_;
+  Child rig_;
+  Child sensor_;
+  Child hand_;
+  std::vector<Child*> children_{&rig_, &sensor_, &hand_};
+};
+
 using FrameKey = std::pair<std::string, std::uint64_t>;  // sensor, sequence
 // Per fingertip: (camera timestamp, any element truly sliding), in frame order.
 using SlipTruth = std::map<std::string, std::vector<std::pair<std::int64_t, bool>>>;
@@ -1049,51 +1098,27 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
   cap.reserve(static_cast<std::size_t>(fps * 4 * (s.seconds + s.warmup_s + 30)));
 
   r.load_at_start = load_average();
-  const fs::path report = dir / "report.json";
-  Child rig_p("rig",
-              {prog.rig.string(), "--scenario", scenario.string(), "--report", report.string(),
-               "--wait-for-hand", fmt::format("{}", s.start_timeout_s), "--log-level", "debug"},
-              dir / "logs" / "rig.log");
-  Child sensor_p("sensor_node",
-                 {prog.sensor.string(), "--config", (dir / "config" / "sensor_node.yaml").string()},
-                 dir / "logs" / "sensor_node.log");
-  Child hand_p("hand_node",
-               {prog.hand.string(), "--config", (dir / "config" / "hand_node.yaml").string()},
-               dir / "logs" / "hand_node.log");
-  const std::vector<Child*> children{&rig_p, &sensor_p, &hand_p};
-
+  PipelineProcesses procs(s, prog, scenario, dir);
   progress(
       fmt::format("{:.0f} fps: rig, sensor_node and hand_node started; waiting for the task", fps));
-  if (!wait_for_task(s, sub, cap, children))
-    fail_run(fmt::format("{:.0f} fps: the task did not start within {} s", fps, s.start_timeout_s),
-             children, dir);
+  if (!wait_for_task(s, sub, cap, procs.children()))
+    procs.fail(
+        fmt::format("{:.0f} fps: the task did not start within {} s", fps, s.start_timeout_s));
   capture_until(sub, cap, util::monotonic_ns() + static_cast<std::int64_t>(s.warmup_s * 1e9),
-                children, {});
+                procs.children(), {});
 
-  const std::map<std::string, pid_t> pids{{"rig", rig_p.pid()},
-                                          {"sensor_node", sensor_p.pid()},
-                                          {"hand_node", hand_p.pid()},
-                                          {"benchmark", ::getpid()}};
-  const Window w = measure_window(s, fps, sub, cap, children, pids, r);
-  if (util::stop_requested()) fail_run("interrupted", children, dir);
+  const Window w = measure_window(s, fps, sub, cap, procs.children(), procs.pids(), r);
+  if (util::stop_requested()) procs.fail("interrupted");
   if (!w.all_running) {
     // The task may end (DONE or a drop, then the rig stops) before the window does: that is a
     // result; CPU is then over the time up to each process's last sample.
     r.task_ended_early = true;
-    if (rig_p.running())
-      fail_run(fmt::format("{:.0f} fps: a program stopped during the run", fps), children, dir);
+    if (procs.rig_running())
+      procs.fail(fmt::format("{:.0f} fps: a program stopped during the run", fps));
     progress(
         fmt::format("{:.0f} fps: the task ended after {:.1f} s of the window", fps, r.window_s));
   }
-  // The nodes first (a sensor_node whose cameras vanished first spends seconds giving up on
-  // them), then the rig, which writes its report on SIGINT.
-  hand_p.stop(milliseconds(5000));
-  sensor_p.stop(milliseconds(10000));
-  const int rig_status = rig_p.stop(milliseconds(10000));
-  if (rig_status != 0 || !fs::exists(report))
-    fail_run(fmt::format("{:.0f} fps: the rig wrote no report (status {})", fps, rig_status),
-             children, dir);
-  read_rig_report(report, dir / "logs" / "rig.log", r);
+  procs.stop(fps, r);
 
   // Decode after the run: nothing but copying competes with the programs while they run.
   Decoded d = decode_captured(cap, w, r);
