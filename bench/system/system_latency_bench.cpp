@@ -492,16 +492,16 @@ struct PipelineResult {
   std::string rig_counters;
   Dist e2e;  // from the report: p50, p99, max; n = the commands' answers (unknown: 0)
   // Stages, in the measured window.
-  Dist gige;  // camera timestamp -> sensor_node received the frame's last packet
-  Dist gige_pair;                  // the same for the later of the two frames of each exposure
-  double steal_ms = std::nan("");  // the host's steal time over the window (all CPUs)
+  Dist gige;       // camera timestamp -> sensor_node received the frame's last packet
+  Dist gige_pair;  // the same for the later of the two frames of each exposure
+  double steal_ms = std::nan("");     // the host's steal time over the window (all CPUs)
   double io_stall_ms = std::nan("");  // every task waiting for I/O at once, over the window
   // StallProbe over the window: its latest wake-up, when, and wake-ups more than 10 ms late.
   double probe_max_late_ms = std::nan("");
   std::int64_t probe_max_at_ns = 0;
   std::uint64_t probe_stalls = 0;
   bool probe_fifo = false;
-  bool subscriber_idle = false;    // this benchmark's subscriber ran under SCHED_IDLE
+  bool subscriber_idle = false;  // this benchmark's subscriber ran under SCHED_IDLE
   // Frames received before their camera timestamp: the timestamps do not say when the frame was
   // sent (the rig renders render_lead_s before the send instant; above 1/render_lead_s frames
   // per second the fake camera sends the image a period early), so latencies are not valid.
@@ -525,7 +525,7 @@ struct PipelineResult {
   std::uint64_t commands = 0;
   std::size_t frame_bytes_p50 = 0;
   std::size_t command_bytes_p50 = 0;
-  std::map<std::string, double> cpu;  // percent of one core
+  std::map<std::string, double> cpu;           // percent of one core
   std::map<std::string, double> major_faults;  // in the window, per process
   // Slip onset (ground truth) -> re-compress command sent, whole run.
   std::vector<double> slip_to_recompress_ms;
@@ -596,14 +596,20 @@ void capture_until(wire::Subscriber& sub, std::vector<Captured>& into, std::int6
   }
 }
 
-PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) {
-  PipelineResult r;
-  r.fps = fps;
-  fs::create_directories(dir / "config");
-  fs::create_directories(dir / "logs");
-  const fs::path rig = program(s, "rig/rig");
-  const fs::path sensor = program(s, "sensor_node/sensor_node");
-  const fs::path hand = program(s, "hand_node/hand_node");
+struct Programs {
+  fs::path rig;
+  fs::path sensor;
+  fs::path hand;
+};
+
+Programs find_programs(const Settings& s) {
+  return {program(s, "rig/rig"), program(s, "sensor_node/sensor_node"),
+          program(s, "hand_node/hand_node")};
+}
+
+// The scenario at `fps` and the programs' configurations from rig --write-configs, with the
+// real-time priority added when asked for. Returns the scenario.
+fs::path write_configs(const Settings& s, double fps, const fs::path& dir, const fs::path& rig) {
   const double budget = s.start_timeout_s + s.warmup_s + s.seconds + 60.0;
   const fs::path scenario = write_scenario(s, fps, budget, dir);
   run_checked(
@@ -618,46 +624,27 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
         throw std::runtime_error(fmt::format("cannot append to {}", (dir / "config" / f).string()));
     }
   }
+  return scenario;
+}
 
-  // Declared before the context: the context's I/O thread starts under it, and ends before it.
-  const IdleScheduling idle(s.idle_subscriber);
-  r.subscriber_idle = idle.active();
-  zmq::context_t ctx;
-  // Everything the programs publish that the stages need; the rig's truth for slip onsets.
-  wire::Subscriber sub(
-      ctx, {"tcp://127.0.0.1:5555", "tcp://127.0.0.1:5557", "tcp://127.0.0.1:5558"},
-      {wire::kFrameTopicPrefix, wire::kTruthTopic, wire::kEventTopic, wire::kCommandTopic});
-  std::vector<Captured> cap;
-  cap.reserve(static_cast<std::size_t>(fps * 4 * (s.seconds + s.warmup_s + 30)));
+// Stops every program and throws `what`, with the log tails of those that had already ended.
+[[noreturn]] void fail_run(const std::string& what, const std::vector<Child*>& children,
+                           const fs::path& dir) {
+  std::string msg = what;
+  for (Child* c : children) {
+    if (!c->running())
+      msg += fmt::format("\n  {} exited with status {}; its log ends:{}", c->name(), c->exit_code(),
+                         tail_of(dir / "logs" / (c->name() + ".log")));
+  }
+  for (Child* c : children)
+    c->stop(milliseconds(3000));
+  throw std::runtime_error(msg);
+}
 
-  r.load_at_start = load_average();
-  const fs::path report = dir / "report.json";
-  Child rig_p("rig",
-              {rig.string(), "--scenario", scenario.string(), "--report", report.string(),
-               "--wait-for-hand", fmt::format("{}", s.start_timeout_s), "--log-level", "debug"},
-              dir / "logs" / "rig.log");
-  Child sensor_p("sensor_node",
-                 {sensor.string(), "--config", (dir / "config" / "sensor_node.yaml").string()},
-                 dir / "logs" / "sensor_node.log");
-  Child hand_p("hand_node",
-               {hand.string(), "--config", (dir / "config" / "hand_node.yaml").string()},
-               dir / "logs" / "hand_node.log");
-  std::vector<Child*> children{&rig_p, &sensor_p, &hand_p};
-  const auto fail = [&](const std::string& what) {
-    std::string msg = what;
-    for (Child* c : children) {
-      if (!c->running())
-        msg += fmt::format("\n  {} exited with status {}; its log ends:{}", c->name(),
-                           c->exit_code(), tail_of(dir / "logs" / (c->name() + ".log")));
-    }
-    for (Child* c : children)
-      c->stop(milliseconds(3000));
-    throw std::runtime_error(msg);
-  };
-
-  // The task starts when hand_node has both fingertips and the arm: its first command.
-  progress(
-      fmt::format("{:.0f} fps: rig, sensor_node and hand_node started; waiting for the task", fps));
+// Captures until hand_node sends its first command (it has both fingertips and the arm: the task
+// starts). False if it did not within the start timeout.
+bool wait_for_task(const Settings& s, wire::Subscriber& sub, std::vector<Captured>& cap,
+                   const std::vector<Child*>& children) {
   std::size_t seen = 0;
   bool started = false;
   capture_until(sub, cap, util::monotonic_ns() + static_cast<std::int64_t>(s.start_timeout_s * 1e9),
@@ -667,20 +654,28 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
                   }
                   return started;
                 });
-  if (!started)
-    fail(fmt::format("{:.0f} fps: the task did not start within {} s", fps, s.start_timeout_s));
-  capture_until(sub, cap, util::monotonic_ns() + static_cast<std::int64_t>(s.warmup_s * 1e9),
-                children, {});
+  return started;
+}
 
-  const std::map<std::string, pid_t> pids{{"rig", rig_p.pid()},
-                                          {"sensor_node", sensor_p.pid()},
-                                          {"hand_node", hand_p.pid()},
-                                          {"benchmark", ::getpid()}};
+// The measured window, in wall-clock (realtime) nanoseconds.
+struct Window {
+  std::int64_t begin_ns = 0;
+  std::int64_t end_ns = 0;
+  bool all_running = false;  // every program still ran at its end
+  bool contains(std::int64_t t) const { return t >= begin_ns && t <= end_ns; }
+};
+
+// Captures for s.seconds while sampling the programs' CPU, the host's steal and I/O stalls and a
+// stall probe; fills those figures into r.
+Window measure_window(const Settings& s, double fps, wire::Subscriber& sub,
+                      std::vector<Captured>& cap, const std::vector<Child*>& children,
+                      const std::map<std::string, pid_t>& pids, PipelineResult& r) {
+  Window w;
   CpuWindow cpu;
   cpu.begin(pids);
   const double steal0 = steal_ms();
   const double io0 = io_full_stall_ms();
-  const std::int64_t w0 = util::realtime_ns();
+  w.begin_ns = util::realtime_ns();
   const std::int64_t m0 = util::monotonic_ns();
   progress(fmt::format("{:.0f} fps: task started; measuring {} s", fps, s.seconds));
   std::int64_t sampled = m0;
@@ -697,36 +692,24 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
   r.probe_max_at_ns = probe.max_at_ns();
   r.probe_stalls = probe.stalls_over_10ms();
   r.probe_fifo = probe.fifo();
-  const bool all_running = rig_p.running() && sensor_p.running() && hand_p.running();
+  w.all_running =
+      std::all_of(children.begin(), children.end(), [](Child* c) { return c->running(); });
   r.cpu = cpu.end(pids);
   r.major_faults = cpu.major_faults();
   r.steal_ms = steal_ms() - steal0;
   r.io_stall_ms = io_full_stall_ms() - io0;
-  const std::int64_t w1 = util::realtime_ns();
-  r.window_s = static_cast<double>(w1 - w0) * 1e-9;
-  if (util::stop_requested()) fail("interrupted");
-  if (!all_running) {
-    // The task may end (DONE or a drop, then the rig stops) before the window does: that is a
-    // result; CPU is then over the time up to each process's last sample.
-    r.task_ended_early = true;
-    if (rig_p.running()) fail(fmt::format("{:.0f} fps: a program stopped during the run", fps));
-    progress(
-        fmt::format("{:.0f} fps: the task ended after {:.1f} s of the window", fps, r.window_s));
-  }
-  // The nodes first (a sensor_node whose cameras vanished first spends seconds giving up on
-  // them), then the rig, which writes its report on SIGINT.
-  hand_p.stop(milliseconds(5000));
-  sensor_p.stop(milliseconds(10000));
-  const int rig_status = rig_p.stop(milliseconds(10000));
-  if (rig_status != 0 || !fs::exists(report))
-    fail(fmt::format("{:.0f} fps: the rig wrote no report (status {})", fps, rig_status));
+  w.end_ns = util::realtime_ns();
+  r.window_s = static_cast<double>(w.end_ns - w.begin_ns) * 1e-9;
+  return w;
+}
+
+// The rig's report (end to end over the whole run) and the counters line of its log.
+void read_rig_report(const fs::path& report, const fs::path& log_path, PipelineResult& r) {
   r.report = json::parse(std::ifstream(report));
-  {
-    std::ifstream log(dir / "logs" / "rig.log");
-    for (std::string l; std::getline(log, l);) {
-      const auto at = l.find("frames rendered");
-      if (at != std::string::npos) r.rig_counters = l.substr(at);
-    }
+  std::ifstream log(log_path);
+  for (std::string l; std::getline(log, l);) {
+    const auto at = l.find("frames rendered");
+    if (at != std::string::npos) r.rig_counters = l.substr(at);
   }
   if (r.report.contains("latency_ms") && r.report["latency_ms"].is_object()) {
     const json& l = r.report["latency_ms"];
@@ -734,83 +717,174 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
     r.e2e.p99 = l.value("p99", std::nan(""));
     r.e2e.max = l.value("max", std::nan(""));
   }
+}
 
-  // Decode after the run: nothing but copying competes with the programs while they run.
-  wire::EnvelopeDecoder dec;
-  std::map<std::pair<std::string, std::uint64_t>, FrameInfo> frames;
+// rig, sensor_node and hand_node as processes, started in this order, each logging to
+// dir/logs/<name>.log; the rig writes its report to dir/report.json when stopped.
+class PipelineProcesses {
+ public:
+  PipelineProcesses(const Settings& s, const Programs& prog, const fs::path& scenario,
+                    const fs::path& dir)
+      : dir_(dir),
+        report_(dir / "report.json"),
+        rig_("rig",
+             {prog.rig.string(), "--scenario", scenario.string(), "--report", report_.string(),
+              "--wait-for-hand", fmt::format("{}", s.start_timeout_s), "--log-level", "debug"},
+             dir / "logs" / "rig.log"),
+        sensor_("sensor_node",
+                {prog.sensor.string(), "--config", (dir / "config" / "sensor_node.yaml").string()},
+                dir / "logs" / "sensor_node.log"),
+        hand_("hand_node",
+              {prog.hand.string(), "--config", (dir / "config" / "hand_node.yaml").string()},
+              dir / "logs" / "hand_node.log") {}
+
+  const std::vector<Child*>& children() const { return children_; }
+  std::map<std::string, pid_t> pids() const {
+    return {{"rig", rig_.pid()},
+            {"sensor_node", sensor_.pid()},
+            {"hand_node", hand_.pid()},
+            {"benchmark", ::getpid()}};
+  }
+  bool rig_running() { return rig_.running(); }
+  [[noreturn]] void fail(const std::string& what) const { fail_run(what, children_, dir_); }
+
+  // The nodes first (a sensor_node whose cameras vanished first spends seconds giving up on
+  // them), then the rig, which writes its report on SIGINT; the report read into r.
+  void stop(double fps, PipelineResult& r) {
+    hand_.stop(milliseconds(5000));
+    sensor_.stop(milliseconds(10000));
+    const int rig_status = rig_.stop(milliseconds(10000));
+    if (rig_status != 0 || !fs::exists(report_))
+      fail(fmt::format("{:.0f} fps: the rig wrote no report (status {})", fps, rig_status));
+    read_rig_report(report_, dir_ / "logs" / "rig.log", r);
+  }
+
+ private:
+  fs::path dir_;
+  fs::path report_;
+  Child rig_;
+  Child sensor_;
+  Child hand_;
+  std::vector<Child*> children_{&rig_, &sensor_, &hand_};
+};
+
+using FrameKey = std::pair<std::string, std::uint64_t>;  // sensor, sequence
+// Per fingertip: (camera timestamp, any element truly sliding), in frame order.
+using SlipTruth = std::map<std::string, std::vector<std::pair<std::int64_t, bool>>>;
+
+// The captured messages, decoded after the run.
+struct Decoded {
+  std::map<FrameKey, FrameInfo> frames;
   std::vector<CommandInfo> commands;
   std::vector<v1::Event> recompress;
-  // Per fingertip: (camera timestamp, any element truly sliding), in frame order.
-  std::map<std::string, std::vector<std::pair<std::int64_t, bool>>> truth;
-  std::map<std::string, std::uint64_t> last_seq;
-  std::vector<double> frame_bytes;
+  SlipTruth truth;
+};
+
+FrameInfo frame_info(const v1::TactileFrame& f) {
+  return {f.sensor_id(),
+          f.sequence(),
+          f.status(),
+          f.camera_timestamp_ns(),
+          f.receive_timestamp_ns(),
+          f.publish_timestamp_ns(),
+          f.measure_time_us(),
+          f.frames_skipped()};
+}
+
+CommandInfo command_info(const v1::ArmCommand& a) {
+  const auto* oneof = a.GetDescriptor()->FindOneofByName("command");
+  const auto* field = a.GetReflection()->GetOneofFieldDescriptor(a, oneof);
+  CommandInfo ci{a.sequence(), a.send_timestamp_ns(), field ? field->name() : "none", {}};
+  for (const v1::FrameRef& ref : a.answers())
+    ci.answers.push_back(
+        {ref.sensor_id(), ref.sequence(), ref.camera_timestamp_ns(), ref.receive_timestamp_ns()});
+  return ci;
+}
+
+void add_truth(const v1::GroundTruth& gt, SlipTruth& truth) {
+  for (const v1::FingertipTruth& ft : gt.fingertips()) {
+    bool sliding = false;
+    for (const v1::ElementTruth& e : ft.elements())
+      sliding = sliding || e.sliding();
+    truth[ft.sensor_id()].emplace_back(ft.camera_timestamp_ns(), sliding);
+  }
+}
+
+// Counts one received TactileFrame: incomplete ones over the run, sequence gaps, statuses and
+// sizes in the window.
+class FrameTally {
+ public:
+  explicit FrameTally(PipelineResult& r) : r_(r) {}
+  void add(const FrameInfo& fi, bool in_window, std::size_t bytes) {
+    if (fi.status != v1::FRAME_STATUS_COMPLETE && fi.status != v1::FRAME_STATUS_NO_REFERENCE)
+      r_.incomplete_run.push_back({{"sensor_id", fi.sensor},
+                                   {"sequence", fi.sequence},
+                                   {"status", v1::FrameStatus_Name(fi.status)},
+                                   {"in_window", in_window}});
+    auto [it, fresh] = last_seq_.try_emplace(fi.sensor, fi.sequence);
+    if (!fresh) {
+      if (in_window && fi.sequence > it->second + 1)
+        r_.sequence_gaps += fi.sequence - it->second - 1;
+      it->second = fi.sequence;
+    }
+    if (!in_window) return;
+    ++r_.frames;
+    r_.frames_skipped += fi.frames_skipped;
+    if (fi.status == v1::FRAME_STATUS_COMPLETE) {
+      ++r_.frames_complete;
+      bytes_.push_back(static_cast<double>(bytes));
+    } else if (fi.status != v1::FRAME_STATUS_NO_REFERENCE) {
+      ++r_.frames_incomplete;
+    }
+  }
+  const std::vector<double>& complete_bytes() const { return bytes_; }
+
+ private:
+  PipelineResult& r_;
+  std::map<std::string, std::uint64_t> last_seq_;
+  std::vector<double> bytes_;
+};
+
+Decoded decode_captured(const std::vector<Captured>& cap, const Window& w, PipelineResult& r) {
+  wire::EnvelopeDecoder dec;
+  Decoded d;
+  FrameTally tally(r);
   std::vector<double> command_bytes;
   for (const Captured& c : cap) {
     if (dec.decode(c.payload) != wire::DecodeStatus::kOk) continue;
     const v1::Envelope& env = dec.envelope();
-    const bool in_window = c.receive_ns >= w0 && c.receive_ns <= w1;
+    const bool in_window = w.contains(c.receive_ns);
     if (env.has_tactile_frame()) {
-      const v1::TactileFrame& f = env.tactile_frame();
-      FrameInfo fi{f.sensor_id(),
-                   f.sequence(),
-                   f.status(),
-                   f.camera_timestamp_ns(),
-                   f.receive_timestamp_ns(),
-                   f.publish_timestamp_ns(),
-                   f.measure_time_us(),
-                   f.frames_skipped()};
-      frames[{fi.sensor, fi.sequence}] = fi;
-      if (fi.status != v1::FRAME_STATUS_COMPLETE && fi.status != v1::FRAME_STATUS_NO_REFERENCE)
-        r.incomplete_run.push_back({{"sensor_id", fi.sensor},
-                                    {"sequence", fi.sequence},
-                                    {"status", v1::FrameStatus_Name(fi.status)},
-                                    {"in_window", in_window}});
-      auto [it, fresh] = last_seq.try_emplace(fi.sensor, fi.sequence);
-      if (!fresh) {
-        if (in_window && fi.sequence > it->second + 1)
-          r.sequence_gaps += fi.sequence - it->second - 1;
-        it->second = fi.sequence;
-      }
-      if (!in_window) continue;
-      ++r.frames;
-      r.frames_skipped += fi.frames_skipped;
-      if (fi.status == v1::FRAME_STATUS_COMPLETE) {
-        ++r.frames_complete;
-        frame_bytes.push_back(static_cast<double>(c.payload.size()));
-      } else if (fi.status != v1::FRAME_STATUS_NO_REFERENCE) {
-        ++r.frames_incomplete;
-      }
+      const FrameInfo fi = frame_info(env.tactile_frame());
+      d.frames[{fi.sensor, fi.sequence}] = fi;
+      tally.add(fi, in_window, c.payload.size());
     } else if (env.has_arm_command()) {
-      const v1::ArmCommand& a = env.arm_command();
-      const auto* oneof = a.GetDescriptor()->FindOneofByName("command");
-      const auto* field = a.GetReflection()->GetOneofFieldDescriptor(a, oneof);
-      CommandInfo ci{a.sequence(), a.send_timestamp_ns(), field ? field->name() : "none", {}};
-      for (const v1::FrameRef& ref : a.answers())
-        ci.answers.push_back({ref.sensor_id(), ref.sequence(), ref.camera_timestamp_ns(),
-                              ref.receive_timestamp_ns()});
-      commands.push_back(ci);
+      d.commands.push_back(command_info(env.arm_command()));
       if (in_window) command_bytes.push_back(static_cast<double>(c.payload.size()));
     } else if (env.has_event()) {
       ++r.events[v1::EventKind_Name(env.event().kind())];
-      if (env.event().kind() == v1::EVENT_KIND_RECOMPRESS) recompress.push_back(env.event());
+      if (env.event().kind() == v1::EVENT_KIND_RECOMPRESS) d.recompress.push_back(env.event());
     } else if (env.has_ground_truth()) {
-      for (const v1::FingertipTruth& ft : env.ground_truth().fingertips()) {
-        bool sliding = false;
-        for (const v1::ElementTruth& e : ft.elements())
-          sliding = sliding || e.sliding();
-        truth[ft.sensor_id()].emplace_back(ft.camera_timestamp_ns(), sliding);
-      }
+      add_truth(env.ground_truth(), d.truth);
     }
   }
-  r.frame_bytes_p50 = static_cast<std::size_t>(percentile(frame_bytes, 0.5));
+  r.frame_bytes_p50 = static_cast<std::size_t>(percentile(tally.complete_bytes(), 0.5));
   r.command_bytes_p50 = static_cast<std::size_t>(percentile(command_bytes, 0.5));
+  return d;
+}
 
+bool whole_in_window(const FrameInfo& f, const Window& w) {
+  return f.status == v1::FRAME_STATUS_COMPLETE && w.contains(f.camera_ns);
+}
+
+// Camera -> sensor_node received, and received -> published, of the whole frames in the window.
+void frame_stages(const std::map<FrameKey, FrameInfo>& frames, const Window& w, PipelineResult& r) {
   std::vector<double> gige;
   std::vector<std::pair<std::int64_t, std::int64_t>> gige_ns;
   std::vector<double> measure;
   std::vector<double> core;
   for (const auto& [key, f] : frames) {
-    if (f.status != v1::FRAME_STATUS_COMPLETE || f.camera_ns < w0 || f.camera_ns > w1) continue;
+    if (!whole_in_window(f, w)) continue;
     gige.push_back(static_cast<double>(f.receive_ns - f.camera_ns) * 1e-6);
     gige_ns.emplace_back(f.camera_ns, f.receive_ns);
     measure.push_back(static_cast<double>(f.publish_ns - f.receive_ns) * 1e-6);
@@ -818,44 +892,49 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
   }
   r.gige = dist(gige);
   r.gige_pair = later_of_pair(gige_ns);
-  // Gaps between consecutive published frames of a sensor, against hand_node's staleness limit
-  // (three frame periods, as rig --write-configs sets it): in camera time and in publish time.
-  {
-    const auto stale_ns = static_cast<std::int64_t>(3e9 / fps);
-    std::map<std::string, std::pair<std::int64_t, std::int64_t>> prev;  // camera, publish
-    for (const auto& [key, f] : frames) {
-      if (f.status != v1::FRAME_STATUS_COMPLETE || f.camera_ns < w0 || f.camera_ns > w1) continue;
-      auto [it, first] = prev.try_emplace(f.sensor, f.camera_ns, f.publish_ns);
-      if (!first) {
-        const std::int64_t cam_gap = f.camera_ns - it->second.first;
-        const std::int64_t pub_gap = f.publish_ns - it->second.second;
-        r.max_camera_gap_ms = std::max(r.max_camera_gap_ms, static_cast<double>(cam_gap) * 1e-6);
-        r.max_publish_gap_ms = std::max(r.max_publish_gap_ms, static_cast<double>(pub_gap) * 1e-6);
-        if (cam_gap > stale_ns) {
-          ++r.camera_gaps_over_stale;
-          r.long_gaps.push_back({{"sensor_id", f.sensor},
-                                 {"after_camera_timestamp_ns", it->second.first},
-                                 {"camera_gap_ms", static_cast<double>(cam_gap) * 1e-6},
-                                 {"publish_gap_ms", static_cast<double>(pub_gap) * 1e-6}});
-        }
-        if (pub_gap > stale_ns) ++r.publish_gaps_over_stale;
-        it->second = {f.camera_ns, f.publish_ns};
-      }
-    }
-  }
   r.gige_negative = static_cast<std::uint64_t>(
       std::count_if(gige.begin(), gige.end(), [](double x) { return x < 0; }));
   r.measure = dist(measure);
   r.measure_core = dist(core);
+}
 
+// Gaps between consecutive published frames of a sensor, against hand_node's staleness limit
+// (three frame periods, as rig --write-configs sets it): in camera time and in publish time.
+void frame_gaps(const std::map<FrameKey, FrameInfo>& frames, const Window& w, double fps,
+                PipelineResult& r) {
+  const auto stale_ns = static_cast<std::int64_t>(3e9 / fps);
+  std::map<std::string, std::pair<std::int64_t, std::int64_t>> prev;  // camera, publish
+  for (const auto& [key, f] : frames) {
+    if (!whole_in_window(f, w)) continue;
+    auto [it, first] = prev.try_emplace(f.sensor, f.camera_ns, f.publish_ns);
+    if (first) continue;
+    const std::int64_t cam_gap = f.camera_ns - it->second.first;
+    const std::int64_t pub_gap = f.publish_ns - it->second.second;
+    r.max_camera_gap_ms = std::max(r.max_camera_gap_ms, static_cast<double>(cam_gap) * 1e-6);
+    r.max_publish_gap_ms = std::max(r.max_publish_gap_ms, static_cast<double>(pub_gap) * 1e-6);
+    if (cam_gap > stale_ns) {
+      ++r.camera_gaps_over_stale;
+      r.long_gaps.push_back({{"sensor_id", f.sensor},
+                             {"after_camera_timestamp_ns", it->second.first},
+                             {"camera_gap_ms", static_cast<double>(cam_gap) * 1e-6},
+                             {"publish_gap_ms", static_cast<double>(pub_gap) * 1e-6}});
+    }
+    if (pub_gap > stale_ns) ++r.publish_gaps_over_stale;
+    it->second = {f.camera_ns, f.publish_ns};
+  }
+}
+
+// Publish -> hand_node received, control, and camera -> command sent, of the commands in the
+// window; camera -> command sent of every answer over the whole run (as the rig counts).
+void command_stages(const Decoded& d, const Window& w, PipelineResult& r) {
   std::vector<double> pub_recv;
   std::vector<double> control;
   std::vector<double> fresh;
   std::vector<double> all;
   std::vector<double> all_no_hold;
-  std::map<std::pair<std::string, std::uint64_t>, bool> counted;
-  for (const CommandInfo& c : commands) {
-    if (c.send_ns < w0 || c.send_ns > w1 || c.answers.empty()) continue;
+  std::map<FrameKey, bool> counted;
+  for (const CommandInfo& c : d.commands) {
+    if (!w.contains(c.send_ns) || c.answers.empty()) continue;
     ++r.commands;
     ++r.command_kinds[c.kind];
     const RefInfo* newest = nullptr;
@@ -866,8 +945,8 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
       if (a.hand_receive_ns > 0 &&
           (newest == nullptr || a.hand_receive_ns > newest->hand_receive_ns))
         newest = &a;
-      const auto f = frames.find({a.sensor, a.sequence});
-      if (a.hand_receive_ns > 0 && f != frames.end() && !counted[{a.sensor, a.sequence}]) {
+      const auto f = d.frames.find({a.sensor, a.sequence});
+      if (a.hand_receive_ns > 0 && f != d.frames.end() && !counted[{a.sensor, a.sequence}]) {
         counted[{a.sensor, a.sequence}] = true;
         pub_recv.push_back(static_cast<double>(a.hand_receive_ns - f->second.publish_ns) * 1e-6);
       }
@@ -878,90 +957,176 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
     }
   }
   std::vector<double> all_run;
-  for (const CommandInfo& c : commands) {
+  for (const CommandInfo& c : d.commands) {
     for (const RefInfo& a : c.answers) {
       if (a.camera_ns > 0) all_run.push_back(static_cast<double>(c.send_ns - a.camera_ns) * 1e-6);
     }
   }
   r.cam_to_send_all_run = dist(all_run);
   r.e2e.n = all_run.size();  // the rig takes one sample per answer of every command it received
-  for (const auto& [tip, tr] : truth) {
-    for (std::size_t k = 0; k < tr.size(); ++k) {
-      if (tr[k].second && (k == 0 || !tr[k - 1].second)) ++r.true_slip_episodes;
-    }
-  }
   r.pub_recv = dist(pub_recv);
   r.control = dist(control);
   r.cam_to_send_fresh = dist(fresh);
   r.cam_to_send_all = dist(all);
   r.cam_to_send_all_no_hold = dist(all_no_hold);
   r.cam_to_send_fresh_samples = fresh;
+}
 
-  // Slip onset -> re-compress command, over the whole run: a RECOMPRESS event names the frames
-  // it answers; its command is the one hand_node sent just before it in the same step (same
-  // answers). The onset is the start of the fingertip's true slip episode (some element sliding
-  // after a frame with none) nearest the answered frame, within three frame periods either side:
-  // the measurement may see a slip a frame before the truth calls it one, and then the time is
-  // negative.
+// A true slip episode of a fingertip starts where some element slides after a frame with none.
+bool episode_starts(const std::vector<std::pair<std::int64_t, bool>>& tr, std::size_t k) {
+  return tr[k].second && (k == 0 || !tr[k - 1].second);
+}
+
+std::uint64_t true_slip_episodes(const SlipTruth& truth) {
+  std::uint64_t n = 0;
+  for (const auto& [tip, tr] : truth) {
+    for (std::size_t k = 0; k < tr.size(); ++k) {
+      if (episode_starts(tr, k)) ++n;
+    }
+  }
+  return n;
+}
+
+// The command hand_node sent just before the event in the same step: the last one before it with
+// the same answers.
+const CommandInfo* command_of(const v1::Event& e, const std::vector<CommandInfo>& commands) {
+  const CommandInfo* cmd = nullptr;
+  for (const CommandInfo& c : commands) {
+    if (c.send_ns > e.time_ns()) break;
+    bool same = c.answers.size() == static_cast<std::size_t>(e.answers_size());
+    for (std::size_t i = 0; same && i < c.answers.size(); ++i)
+      same = c.answers[i].camera_ns == e.answers(static_cast<int>(i)).camera_timestamp_ns();
+    if (same) cmd = &c;
+  }
+  return cmd;
+}
+
+// One re-compression against the truth: the episode onsets of its fingertip nearest before and
+// after the frame it answered.
+struct Recompression {
+  std::int64_t answered = 0;  // camera timestamp of the answered frame of its fingertip
+  const CommandInfo* command = nullptr;
+  std::int64_t onset = 0;  // 0: none
+  std::int64_t onset_after = 0;
+};
+
+Recompression match_recompression(const v1::Event& e, const std::vector<CommandInfo>& commands,
+                                  const std::vector<std::pair<std::int64_t, bool>>& tr) {
+  Recompression m;
+  for (const v1::FrameRef& a : e.answers()) {
+    if (a.sensor_id() == e.sensor_id()) m.answered = a.camera_timestamp_ns();
+  }
+  m.command = command_of(e, commands);
+  for (std::size_t k = 0; k < tr.size() && tr[k].first <= m.answered; ++k) {
+    if (episode_starts(tr, k)) m.onset = tr[k].first;
+  }
+  for (std::size_t k = 1; k < tr.size(); ++k) {
+    if (tr[k].first > m.answered && episode_starts(tr, k)) {
+      m.onset_after = tr[k].first;
+      break;
+    }
+  }
+  return m;
+}
+
+// What happened around a re-compression, for the JSON.
+json recompression_detail(const v1::Event& e, const Recompression& m,
+                          const std::vector<std::pair<std::int64_t, bool>>& tr) {
+  const auto rel = [&](std::int64_t t) {
+    return t == 0 ? json(nullptr) : json(static_cast<double>(t - m.answered) * 1e-6);
+  };
+  return {{"sensor_id", e.sensor_id()},
+          {"answered_camera_timestamp_ns", m.answered},
+          {"command_sent_ms_after_answered", m.command ? rel(m.command->send_ns) : json(nullptr)},
+          {"true_onset_before_ms", rel(m.onset)},
+          {"true_onset_after_ms", rel(m.onset_after)},
+          {"sliding_in_answered_frame", [&] {
+             for (const auto& [t, sl] : tr) {
+               if (t == m.answered) return json(sl);
+             }
+             return json(nullptr);
+           }()}};
+}
+
+// Slip onset -> re-compress command, over the whole run: a RECOMPRESS event names the frames it
+// answers; its command is the one hand_node sent just before it in the same step (same answers).
+// The onset is the start of the fingertip's true slip episode nearest the answered frame, within
+// three frame periods either side: the measurement may see a slip a frame before the truth calls
+// it one, and then the time is negative.
+void slip_to_recompress(Decoded& d, double fps, PipelineResult& r) {
   const auto near_ns = static_cast<std::int64_t>(3e9 / fps) + 1'000'000;
-  for (const v1::Event& e : recompress) {
+  for (const v1::Event& e : d.recompress) {
     ++r.recompress_events;
-    std::int64_t answered = 0;
-    for (const v1::FrameRef& a : e.answers()) {
-      if (a.sensor_id() == e.sensor_id()) answered = a.camera_timestamp_ns();
-    }
-    const CommandInfo* cmd = nullptr;
-    for (const CommandInfo& c : commands) {
-      if (c.send_ns > e.time_ns()) break;
-      bool same = c.answers.size() == static_cast<std::size_t>(e.answers_size());
-      for (std::size_t i = 0; same && i < c.answers.size(); ++i)
-        same = c.answers[i].camera_ns == e.answers(static_cast<int>(i)).camera_timestamp_ns();
-      if (same) cmd = &c;
-    }
-    const auto& tr = truth[e.sensor_id()];
-    std::int64_t onset = 0;
-    for (std::size_t k = 0; k < tr.size() && tr[k].first <= answered; ++k) {
-      if (tr[k].second && (k == 0 || !tr[k - 1].second)) onset = tr[k].first;
-    }
-    // What happened around it, for the JSON: the fingertip's truth onsets nearest before and after.
-    std::int64_t onset_after = 0;
-    for (std::size_t k = 1; k < tr.size(); ++k) {
-      if (tr[k].first > answered && tr[k].second && !tr[k - 1].second) {
-        onset_after = tr[k].first;
-        break;
-      }
-    }
-    const auto rel = [&](std::int64_t t) {
-      return t == 0 ? json(nullptr) : json(static_cast<double>(t - answered) * 1e-6);
-    };
-    r.recompress_detail.push_back(
-        {{"sensor_id", e.sensor_id()},
-         {"answered_camera_timestamp_ns", answered},
-         {"command_sent_ms_after_answered", cmd ? rel(cmd->send_ns) : json(nullptr)},
-         {"true_onset_before_ms", rel(onset)},
-         {"true_onset_after_ms", rel(onset_after)},
-         {"sliding_in_answered_frame", [&] {
-            for (const auto& [t, sl] : tr) {
-              if (t == answered) return json(sl);
-            }
-            return json(nullptr);
-          }()}});
-    if (cmd == nullptr || answered == 0) {
+    const auto& tr = d.truth[e.sensor_id()];
+    const Recompression m = match_recompression(e, d.commands, tr);
+    r.recompress_detail.push_back(recompression_detail(e, m, tr));
+    if (m.command == nullptr || m.answered == 0) {
       ++r.recompress_no_command;
       continue;
     }
     std::int64_t nearest = 0;
-    for (const std::int64_t o : {onset, onset_after}) {
-      if (o != 0 && std::llabs(o - answered) <= near_ns &&
-          (nearest == 0 || std::llabs(o - answered) < std::llabs(nearest - answered)))
+    for (const std::int64_t o : {m.onset, m.onset_after}) {
+      if (o != 0 && std::llabs(o - m.answered) <= near_ns &&
+          (nearest == 0 || std::llabs(o - m.answered) < std::llabs(nearest - m.answered)))
         nearest = o;
     }
     if (nearest == 0) {
       ++r.recompress_no_onset;
       continue;
     }
-    r.slip_to_recompress_ms.push_back(static_cast<double>(cmd->send_ns - nearest) * 1e-6);
+    r.slip_to_recompress_ms.push_back(static_cast<double>(m.command->send_ns - nearest) * 1e-6);
   }
+}
+
+PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) {
+  PipelineResult r;
+  r.fps = fps;
+  fs::create_directories(dir / "config");
+  fs::create_directories(dir / "logs");
+  const Programs prog = find_programs(s);
+  const fs::path scenario = write_configs(s, fps, dir, prog.rig);
+
+  // Declared before the context: the context's I/O thread starts under it, and ends before it.
+  const IdleScheduling idle(s.idle_subscriber);
+  r.subscriber_idle = idle.active();
+  zmq::context_t ctx;
+  // Everything the programs publish that the stages need; the rig's truth for slip onsets.
+  wire::Subscriber sub(
+      ctx, {"tcp://127.0.0.1:5555", "tcp://127.0.0.1:5557", "tcp://127.0.0.1:5558"},
+      {wire::kFrameTopicPrefix, wire::kTruthTopic, wire::kEventTopic, wire::kCommandTopic});
+  std::vector<Captured> cap;
+  cap.reserve(static_cast<std::size_t>(fps * 4 * (s.seconds + s.warmup_s + 30)));
+
+  r.load_at_start = load_average();
+  PipelineProcesses procs(s, prog, scenario, dir);
+  progress(
+      fmt::format("{:.0f} fps: rig, sensor_node and hand_node started; waiting for the task", fps));
+  if (!wait_for_task(s, sub, cap, procs.children()))
+    procs.fail(
+        fmt::format("{:.0f} fps: the task did not start within {} s", fps, s.start_timeout_s));
+  capture_until(sub, cap, util::monotonic_ns() + static_cast<std::int64_t>(s.warmup_s * 1e9),
+                procs.children(), {});
+
+  const Window w = measure_window(s, fps, sub, cap, procs.children(), procs.pids(), r);
+  if (util::stop_requested()) procs.fail("interrupted");
+  if (!w.all_running) {
+    // The task may end (DONE or a drop, then the rig stops) before the window does: that is a
+    // result; CPU is then over the time up to each process's last sample.
+    r.task_ended_early = true;
+    if (procs.rig_running())
+      procs.fail(fmt::format("{:.0f} fps: a program stopped during the run", fps));
+    progress(
+        fmt::format("{:.0f} fps: the task ended after {:.1f} s of the window", fps, r.window_s));
+  }
+  procs.stop(fps, r);
+
+  // Decode after the run: nothing but copying competes with the programs while they run.
+  Decoded d = decode_captured(cap, w, r);
+  frame_stages(d.frames, w, r);
+  frame_gaps(d.frames, w, fps, r);
+  command_stages(d, w, r);
+  r.true_slip_episodes = true_slip_episodes(d.truth);
+  slip_to_recompress(d, fps, r);
   return r;
 }
 
@@ -969,10 +1134,10 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
 // The transport alone
 
 struct AravisResult {
-  Dist latency;                // camera timestamp -> receive_timestamp_ns, whole frames
-  Dist latency_pair;           // the same for the later of the two frames of each exposure
+  Dist latency;                    // camera timestamp -> receive_timestamp_ns, whole frames
+  Dist latency_pair;               // the same for the later of the two frames of each exposure
   double steal_ms = std::nan("");  // the host's steal time over the window (all CPUs)
-  std::uint64_t negative = 0;  // received before the camera timestamp (see gige_negative)
+  std::uint64_t negative = 0;      // received before the camera timestamp (see gige_negative)
   std::uint64_t frames = 0;
   std::uint64_t complete = 0;
   std::uint64_t lost = 0;
@@ -1353,7 +1518,8 @@ std::string row_label(const RateResult& rr, const Settings& s) {
                     : fmt::format("{:.0f}", rr.pipe.fps);
 }
 
-void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
+// What was run, and per rate: end to end against the transport alone, and CPU.
+void print_overview(const std::vector<RateResult>& rs, const Settings& s) {
   std::printf(
       "\nTwo cameras, %.0f s measured per rate after the task started (+%.0f s warm-up); "
       "transport alone %.0f s per rate. Times in ms; CPU in %% of one core.%s\n\n",
@@ -1384,6 +1550,10 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
                 static_cast<unsigned long long>(p.frames), cpu("sensor_node").c_str(),
                 cpu("hand_node").c_str(), cpu("rig").c_str(), cpu("benchmark").c_str());
   }
+}
+
+// Frames, faults and the machine's own pauses in the window.
+void print_frames_table(const std::vector<RateResult>& rs, const Settings& s) {
   std::printf(
       "\nFrames and faults in the window (e2e samples: whole run, one per answer of every "
       "command):\n\n"
@@ -1417,6 +1587,10 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
         static_cast<unsigned long long>(p.probe_stalls), p.probe_fifo ? "" : " (not FIFO)",
         p.rig_counters.c_str());
   }
+}
+
+// Each stage of the pipeline, camera to command.
+void print_stages_table(const std::vector<RateResult>& rs, const Settings& s) {
   std::printf(
       "\nStages, p50 / p99 (ms):\n\n"
       "| fps | GigE Vision receive | (later of the exposure's two) | measurement + publish | (core "
@@ -1435,6 +1609,10 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
         pp(p.cam_to_send_all_no_hold).c_str(), static_cast<unsigned long long>(p.commands),
         static_cast<unsigned long long>(holds == p.command_kinds.end() ? 0 : holds->second));
   }
+}
+
+// The transport alone: Aravis receive and the ZeroMQ hops.
+void print_transport_table(const std::vector<RateResult>& rs, const Settings& s) {
   std::printf(
       "\nTransport alone, p50 / p99 / max (ms):\n\n"
       "| fps | Aravis receive | (later of the exposure's two) | frames (complete/received) | "
@@ -1454,6 +1632,10 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
                 ppm(z.round_trip).c_str(), ppm(z.pub_sub).c_str(), ppm(z.dealer_router).c_str(),
                 z.frame_bytes, z.command_bytes);
   }
+}
+
+// Slip onset (ground truth) -> re-compress command.
+void print_slip_table(const std::vector<RateResult>& rs, const Settings& s) {
   std::printf(
       "\nSlip onset (ground truth) -> re-compress command sent by hand_node, whole run:\n\n"
       "| fps | true slip episodes | re-compressions | with a true onset within 3 periods | without "
@@ -1472,6 +1654,10 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
                 ms(lo, 2).c_str(), ms(d.p50, 2).c_str(), ms(d.max, 2).c_str(),
                 2000.0 / p.fps + 1.0);
   }
+}
+
+// Frames that arrived before their camera timestamp make the latencies at that rate suspect.
+void print_timestamp_warnings(const std::vector<RateResult>& rs, const Settings& s) {
   for (const RateResult& rr : rs) {
     const PipelineResult& p = rr.pipe;
     const std::uint64_t ahead = p.gige_negative + (rr.aravis ? rr.aravis->negative : 0);
@@ -1491,6 +1677,10 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
               : "Rare: latencies stand, their tails slightly understated.");
     }
   }
+}
+
+// Pauses of the machine (steal, stalled wake-ups, I/O, page faults) that explain tail latencies.
+void print_machine_notes(const std::vector<RateResult>& rs, const Settings& s) {
   for (const RateResult& rr : rs) {
     const PipelineResult& p = rr.pipe;
     // One 10 ms tick of steal is common; more means the host paused this machine for a while.
@@ -1522,46 +1712,61 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
             row_label(rr, s).c_str(), k, p.major_faults.at(k));
     }
   }
-  for (const RateResult& rr : rs) {
-    const PipelineResult& p = rr.pipe;
-    if (std::abs(p.fps - 200.0) > 1e-9) continue;
-    const auto verdict = [](bool measured, bool ok) {
-      return !measured ? "not measured" : ok ? "met" : "NOT met";
-    };
+}
+
+// The targets, judged on one 200 fps run.
+void print_targets(const RateResult& rr, const Settings& s) {
+  const PipelineResult& p = rr.pipe;
+  const auto verdict = [](bool measured, bool ok) {
+    return !measured ? "not measured" : ok ? "met" : "NOT met";
+  };
+  std::printf(
+      "\nTargets (two cameras, 200 fps%s):\n\n| target | measured | verdict |\n|---|---|---|\n",
+      s.runs > 1 ? fmt::format(", run {} of {}", rr.run, s.runs).c_str() : "");
+  std::printf("| end to end p50 <= 1 ms | %s ms | %s |\n", ms(p.e2e.p50).c_str(),
+              verdict(std::isfinite(p.e2e.p50), p.e2e.p50 <= 1.0));
+  std::printf("| end to end p99 <= 3 ms (max reported) | %s ms (max %s ms) | %s |\n",
+              ms(p.e2e.p99).c_str(), ms(p.e2e.max).c_str(),
+              verdict(std::isfinite(p.e2e.p99), p.e2e.p99 <= 3.0));
+  std::smatch m;
+  long long rig_incomplete = -1;
+  const std::regex re("incomplete ([0-9]+)");
+  if (std::regex_search(p.rig_counters, m, re)) rig_incomplete = std::stoll(m[1].str());
+  std::printf("| no incomplete frames | %llu in the window; %s in the whole run (rig) | %s |\n",
+              static_cast<unsigned long long>(p.frames_incomplete),
+              rig_incomplete < 0 ? "?" : std::to_string(rig_incomplete).c_str(),
+              verdict(true, p.frames_incomplete == 0 && rig_incomplete == 0));
+  if (rr.aravis && rr.zmq) {
+    const double added = p.e2e.p50 - transport_alone_p50(rr);
     std::printf(
-        "\nTargets (two cameras, 200 fps%s):\n\n| target | measured | verdict |\n|---|---|---|\n",
-        s.runs > 1 ? fmt::format(", run {} of {}", rr.run, s.runs).c_str() : "");
-    std::printf("| end to end p50 <= 1 ms | %s ms | %s |\n", ms(p.e2e.p50).c_str(),
-                verdict(std::isfinite(p.e2e.p50), p.e2e.p50 <= 1.0));
-    std::printf("| end to end p99 <= 3 ms (max reported) | %s ms (max %s ms) | %s |\n",
-                ms(p.e2e.p99).c_str(), ms(p.e2e.max).c_str(),
-                verdict(std::isfinite(p.e2e.p99), p.e2e.p99 <= 3.0));
-    std::smatch m;
-    long long rig_incomplete = -1;
-    const std::regex re("incomplete ([0-9]+)");
-    if (std::regex_search(p.rig_counters, m, re)) rig_incomplete = std::stoll(m[1].str());
-    std::printf("| no incomplete frames | %llu in the window; %s in the whole run (rig) | %s |\n",
-                static_cast<unsigned long long>(p.frames_incomplete),
-                rig_incomplete < 0 ? "?" : std::to_string(rig_incomplete).c_str(),
-                verdict(true, p.frames_incomplete == 0 && rig_incomplete == 0));
-    if (rr.aravis && rr.zmq) {
-      const double added = p.e2e.p50 - transport_alone_p50(rr);
-      std::printf(
-          "| pipeline adds <= 0.150 ms at p50 over the transport alone | %s ms (%s ms over the "
-          "per-frame transport) | %s |\n",
-          ms(added).c_str(), ms(p.e2e.p50 - transport_alone_per_frame_p50(rr)).c_str(),
-          verdict(std::isfinite(added), added <= 0.150));
-    }
-    const bool cpu_known = p.cpu.count("sensor_node") > 0;
-    std::printf("| sensor_node <= 25 %% of one core | %s | %s |\n",
-                cpu_known ? fmt::format("{:.1f} %", p.cpu.at("sensor_node")).c_str() : "-",
-                verdict(cpu_known, cpu_known && p.cpu.at("sensor_node") <= 25.0));
-    const Dist d = dist(p.slip_to_recompress_ms);
-    std::printf("| slip onset -> re-compress command <= 2 periods + 1 ms (%.1f ms) | %s | %s |\n",
-                2000.0 / p.fps + 1.0,
-                d.n > 0 ? fmt::format("max {} ms over {}", ms(d.max, 2), d.n).c_str()
-                        : "no re-compression near a true onset",
-                verdict(d.n > 0, d.max <= 2000.0 / p.fps + 1.0));
+        "| pipeline adds <= 0.150 ms at p50 over the transport alone | %s ms (%s ms over the "
+        "per-frame transport) | %s |\n",
+        ms(added).c_str(), ms(p.e2e.p50 - transport_alone_per_frame_p50(rr)).c_str(),
+        verdict(std::isfinite(added), added <= 0.150));
+  }
+  const bool cpu_known = p.cpu.count("sensor_node") > 0;
+  std::printf("| sensor_node <= 25 %% of one core | %s | %s |\n",
+              cpu_known ? fmt::format("{:.1f} %", p.cpu.at("sensor_node")).c_str() : "-",
+              verdict(cpu_known, cpu_known && p.cpu.at("sensor_node") <= 25.0));
+  const Dist d = dist(p.slip_to_recompress_ms);
+  std::printf("| slip onset -> re-compress command <= 2 periods + 1 ms (%.1f ms) | %s | %s |\n",
+              2000.0 / p.fps + 1.0,
+              d.n > 0 ? fmt::format("max {} ms over {}", ms(d.max, 2), d.n).c_str()
+                      : "no re-compression near a true onset",
+              verdict(d.n > 0, d.max <= 2000.0 / p.fps + 1.0));
+}
+
+void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
+  print_overview(rs, s);
+  print_frames_table(rs, s);
+  print_stages_table(rs, s);
+  print_transport_table(rs, s);
+  print_slip_table(rs, s);
+  print_timestamp_warnings(rs, s);
+  print_machine_notes(rs, s);
+  for (const RateResult& rr : rs) {
+    if (std::abs(rr.pipe.fps - 200.0) > 1e-9) continue;
+    print_targets(rr, s);
   }
   if (s.runs > 1) print_runs_summary(rs, s);
   std::fflush(stdout);

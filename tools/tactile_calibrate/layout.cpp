@@ -307,8 +307,9 @@ PiecewiseLinear placeholder_shear_curve() {
   return PiecewiseLinear({0, 0.02, 0.08}, {0, 0.05, 0.4});
 }
 
-LayoutResult find_layout(const LayoutInput& in, const LayoutOptions& o, const Progress& progress) {
-  if (in.frames.empty()) throw std::invalid_argument("no frames given");
+namespace {
+
+void check_options(const LayoutOptions& o) {
   if (o.sensor_id.empty()) throw std::invalid_argument("--sensor-id must not be empty");
   if (!(o.mm_per_px > 0) || !std::isfinite(o.mm_per_px))
     throw std::invalid_argument("--mm-per-px must be a positive number");
@@ -317,6 +318,10 @@ LayoutResult find_layout(const LayoutInput& in, const LayoutOptions& o, const Pr
   if (!(o.detect_sigmas > 3)) throw std::invalid_argument("--detect-sigmas must be above 3");
   if (o.min_area < 1) throw std::invalid_argument("--min-area must be at least 1");
   if (!(o.merge_px > 0)) throw std::invalid_argument("--merge-px must be positive");
+}
+
+// Every frame and reference has the first frame's size and format.
+void check_sizes(const LayoutInput& in) {
   const Image& first = in.frames.front();
   const auto describe = [](const Image& i) {
     return fmt::format("{}x{} {}-bit", i.width(), i.height(), bit_depth(i.format()));
@@ -332,43 +337,55 @@ LayoutResult find_layout(const LayoutInput& in, const LayoutOptions& o, const Pr
       }
     }
   }
+}
+
+// Counts frames for the progress report: each frame is looked at three times (spots, and two
+// passes of the measurement core).
+class FrameProgress {
+ public:
+  FrameProgress(const Progress& progress, std::size_t frames)
+      : progress_(progress), total_(frames * 3) {}
+  void advance(std::size_t frames = 1) {
+    done_ += frames;
+    if (progress_) progress_(done_, total_, "frames");
+  }
+
+ private:
+  const Progress& progress_;
+  std::size_t total_;
+  std::size_t done_ = 0;
+};
+
+// What the increment is taken against: the mean of the no-load references, or (without them) a
+// background estimated from the mean of the frames.
+Plane no_load_plane(const LayoutInput& in) {
+  if (!in.references.empty()) return mean_of(in.references);
+  return estimate_background(mean_of(in.frames));
+}
+
+// One frame's noise: from two frames of the same kind when there are two, else from a frame
+// against the reference (spots are clipped as outliers).
+double frame_noise(const LayoutInput& in, const Plane& reference) {
+  Plane d;
+  double factor = std::sqrt(0.5);
+  if (in.references.size() >= 2) {
+    d = difference(to_plane(in.references[0]), to_plane(in.references[1]));
+  } else if (!in.references.empty()) {
+    d = difference(to_plane(in.frames[0]), to_plane(in.references[0]));
+  } else if (in.frames.size() >= 2) {
+    d = difference(to_plane(in.frames[0]), to_plane(in.frames[1]));
+  } else {
+    d = difference(to_plane(in.frames[0]), reference);
+    factor = 1.0;
+  }
+  return factor * clipped_stats(d.v).second;
+}
+
+// The calibration without elements: thresholds scaled to the noise unless given.
+Calibration thresholds_for(const Image& first, const LayoutOptions& o, double noise_sigma) {
   const int depth = bit_depth(first.format());
   const double scale = depth == 16 ? 257.0 : 1.0;
-  const bool with_reference = !in.references.empty();
-  const std::size_t nf = in.frames.size();
-  const std::size_t total = nf * 3;
-  std::size_t done = 0;
-  const auto step = [&] {
-    ++done;
-    if (progress) progress(done, total, "frames");
-  };
-
-  // --- the increment and the pixel noise -------------------------------------------------------
-  LayoutResult result;
-  Plane reference;
-  if (with_reference) {
-    reference = mean_of(in.references);
-  } else {
-    reference = estimate_background(mean_of(in.frames));
-  }
-  {
-    // One frame's noise: from two frames of the same kind when there are two, else from a
-    // frame against the reference (spots are clipped as outliers).
-    Plane d;
-    double factor = std::sqrt(0.5);
-    if (in.references.size() >= 2) {
-      d = difference(to_plane(in.references[0]), to_plane(in.references[1]));
-    } else if (with_reference) {
-      d = difference(to_plane(in.frames[0]), to_plane(in.references[0]));
-    } else if (nf >= 2) {
-      d = difference(to_plane(in.frames[0]), to_plane(in.frames[1]));
-    } else {
-      d = difference(to_plane(in.frames[0]), reference);
-      factor = 1.0;
-    }
-    result.noise_sigma = factor * clipped_stats(d.v).second;
-  }
-  const double sigma8 = result.noise_sigma / scale;
+  const double sigma8 = noise_sigma / scale;
   const double noise_scale = std::max(1.0, sigma8 / 2.0);
   Calibration cal;
   cal.sensor_id = o.sensor_id;
@@ -381,28 +398,35 @@ LayoutResult find_layout(const LayoutInput& in, const LayoutOptions& o, const Pr
   cal.contact_off = o.contact_off.value_or(std::min(scale * 250.0 * noise_scale, cal.contact_on));
   cal.normal_curve = placeholder_normal_curve(depth);
   cal.shear_curve = placeholder_shear_curve();
+  return cal;
+}
 
-  // --- spots
-  // --------------------------------------------------------------------------------------
+// Spots: each frame's increment (or, without references, the mean frame's) searched for spots;
+// detections close together are one element. `preview` gets the largest increment seen.
+std::vector<Cluster> find_spots(const LayoutInput& in, const LayoutOptions& o,
+                                const Plane& reference, double min_strength,
+                                FrameProgress& progress, Plane& preview) {
   std::vector<Cluster> clusters;
-  Plane preview_inc;
-  if (with_reference) {
-    preview_inc = Plane{first.width(), first.height(), std::vector<double>(reference.v.size())};
-    for (const Image& f : in.frames) {
-      const Plane inc = difference(to_plane(f), reference);
-      for (std::size_t i = 0; i < inc.v.size(); ++i)
-        preview_inc.v[i] = std::max(preview_inc.v[i], inc.v[i]);
-      add_detections(clusters, detect(inc, o, cal.contact_off), o.merge_px);
-      step();
-    }
-  } else {
-    preview_inc = difference(mean_of(in.frames), reference);
-    add_detections(clusters, detect(preview_inc, o, cal.contact_off), o.merge_px);
-    done += nf;
-    if (progress) progress(done, total, "frames");
+  if (in.references.empty()) {
+    preview = difference(mean_of(in.frames), reference);
+    add_detections(clusters, detect(preview, o, min_strength), o.merge_px);
+    progress.advance(in.frames.size());
+    return clusters;
   }
-  result.increment_preview = to_preview(preview_inc);
+  const Image& first = in.frames.front();
+  preview = Plane{first.width(), first.height(), std::vector<double>(reference.v.size())};
+  for (const Image& f : in.frames) {
+    const Plane inc = difference(to_plane(f), reference);
+    for (std::size_t i = 0; i < inc.v.size(); ++i)
+      preview.v[i] = std::max(preview.v[i], inc.v[i]);
+    add_detections(clusters, detect(inc, o, min_strength), o.merge_px);
+    progress.advance();
+  }
+  return clusters;
+}
 
+// Refusal: a count other than --expect, or none at all.
+void check_count(const std::vector<Cluster>& clusters, const LayoutOptions& o) {
   if (o.expect != 0 && clusters.size() != o.expect) {
     std::string detail;
     if (clusters.size() > o.expect) {
@@ -429,9 +453,12 @@ LayoutResult find_layout(const LayoutInput& in, const LayoutOptions& o, const Pr
         "found no elements: no spot stands out of the noise (is the sensor pressed, lit, in "
         "focus?)");
   }
+}
 
-  // --- disks
-  // --------------------------------------------------------------------------------------
+// The disks' radius: --radius, or 0.45 of the closest spots' distance; refused where disks
+// would overlap or leave the image.
+double disk_radius(const std::vector<Cluster>& clusters, const LayoutOptions& o,
+                   const Calibration& cal) {
   double min_dist = INFINITY;
   std::size_t pa = 0;
   std::size_t pb = 0;
@@ -470,156 +497,202 @@ LayoutResult find_layout(const LayoutInput& in, const LayoutOptions& o, const Pr
           at(p), radius, cal.width, cal.height));
     }
   }
+  return radius;
+}
 
-  // --- positions with the measurement core -------------------------------------------------
-  std::vector<Vec2> pos;
-  for (const Cluster& c : clusters)
-    pos.push_back(c.mean());
+// The measurement core on disks of `radius` centred on `pos`, its reference taken from the
+// no-load references (or the estimated background).
+Extractor core_at(const std::vector<Vec2>& pos, double radius, const Calibration& cal,
+                  const LayoutInput& in, const LayoutOptions& o, const Plane& reference) {
+  const bool with_reference = !in.references.empty();
   ExtractorOptions xo;
   xo.estimator = o.estimator;
   xo.reference_spot_check = false;
   xo.reference_frames = with_reference ? static_cast<int>(in.references.size()) : 1;
+  Calibration trial = cal;
+  trial.elements.clear();
+  for (std::size_t i = 0; i < pos.size(); ++i) {
+    ElementCalibration e;
+    e.id = static_cast<std::uint32_t>(i);
+    e.center_px = pos[i];
+    e.radius_px = radius;
+    e.zero_px = pos[i];
+    trial.elements.push_back(e);
+  }
+  Extractor ex(trial, xo);
+  ReferenceResult rr;
+  if (with_reference) {
+    for (const Image& r : in.references)
+      rr = ex.add_reference_frame(r.view());
+  } else {
+    const Image& first = in.frames.front();
+    Image bg(cal.width, cal.height, first.format());
+    const double top = bit_depth(first.format()) == 16 ? 65535.0 : 255.0;
+    for (int y = 0; y < cal.height; ++y)
+      for (int x = 0; x < cal.width; ++x)
+        bg.set(x, y,
+               static_cast<std::uint32_t>(std::clamp(std::round(reference.at(x, y)), 0.0, top)));
+    rr = ex.add_reference_frame(bg.view());
+  }
+  if (!ex.has_reference()) {
+    throw std::runtime_error(std::string("the no-load references were refused: ") +
+                             to_string(rr.status) +
+                             " (something moved or touched the sensor while they were taken)");
+  }
+  return ex;
+}
+
+// Sums over the frames where each element is in contact.
+struct ContactSums {
+  explicit ContactSums(std::size_t elements)
+      : sum(elements), sum2(elements), g(elements, 0.0), n(elements, 0) {}
+  std::vector<Vec2> sum;
+  std::vector<Vec2> sum2;
+  std::vector<double> g;
+  std::vector<std::size_t> n;
+};
+
+ContactSums measure_frames(Extractor& ex, const std::vector<Image>& frames,
+                           FrameProgress& progress) {
+  ContactSums t(ex.readings().size());
+  const Image blank = ex.reference_image();
+  std::uint64_t seq = 0;
+  for (const Image& f : frames) {
+    // The blank frame ends every contact, so each frame is measured on its own.
+    ex.measure(blank.view(), {seq, 0});
+    ex.measure(f.view(), {seq + 10, 0});
+    seq += 20;
+    const auto readings = ex.readings();
+    for (std::size_t i = 0; i < readings.size(); ++i) {
+      if (!readings[i].contact) continue;
+      t.sum[i] = t.sum[i] + Vec2{readings[i].x_px, readings[i].y_px};
+      t.sum2[i] = t.sum2[i] +
+                  Vec2{readings[i].x_px * readings[i].x_px, readings[i].y_px * readings[i].y_px};
+      t.g[i] += readings[i].G;
+      t.n[i] += 1;
+    }
+    progress.advance();
+  }
+  return t;
+}
+
+// The positions again with the real measurement core (disks centred on the first estimate, then
+// once more on the result), averaged over the frames where the element is in contact. Updates
+// `pos` and fills the elements' position, frames, G and spread.
+std::vector<FoundElement> measure_positions(std::vector<Vec2>& pos, double radius,
+                                            const Calibration& cal, const LayoutInput& in,
+                                            const LayoutOptions& o, const Plane& reference,
+                                            FrameProgress& progress) {
   std::vector<FoundElement> found(pos.size());
   for (int pass = 0; pass < 2; ++pass) {
-    Calibration trial = cal;
-    trial.elements.clear();
+    Extractor ex = core_at(pos, radius, cal, in, o, reference);
+    const ContactSums t = measure_frames(ex, in.frames, progress);
     for (std::size_t i = 0; i < pos.size(); ++i) {
-      ElementCalibration e;
-      e.id = static_cast<std::uint32_t>(i);
-      e.center_px = pos[i];
-      e.radius_px = radius;
-      e.zero_px = pos[i];
-      trial.elements.push_back(e);
-    }
-    Extractor ex(trial, xo);
-    ReferenceResult rr;
-    if (with_reference) {
-      for (const Image& r : in.references)
-        rr = ex.add_reference_frame(r.view());
-    } else {
-      Image bg(cal.width, cal.height, first.format());
-      const double top = depth == 16 ? 65535.0 : 255.0;
-      for (int y = 0; y < cal.height; ++y)
-        for (int x = 0; x < cal.width; ++x)
-          bg.set(x, y,
-                 static_cast<std::uint32_t>(std::clamp(std::round(reference.at(x, y)), 0.0, top)));
-      rr = ex.add_reference_frame(bg.view());
-    }
-    if (!ex.has_reference()) {
-      throw std::runtime_error(std::string("the no-load references were refused: ") +
-                               to_string(rr.status) +
-                               " (something moved or touched the sensor while they were taken)");
-    }
-    const Image blank = ex.reference_image();
-    std::vector<Vec2> sum(pos.size());
-    std::vector<Vec2> sum2(pos.size());
-    std::vector<double> g(pos.size(), 0.0);
-    std::vector<std::size_t> n(pos.size(), 0);
-    std::uint64_t seq = 0;
-    for (const Image& f : in.frames) {
-      // The blank frame ends every contact, so each frame is measured on its own.
-      ex.measure(blank.view(), {seq, 0});
-      ex.measure(f.view(), {seq + 10, 0});
-      seq += 20;
-      const auto readings = ex.readings();
-      for (std::size_t i = 0; i < readings.size(); ++i) {
-        if (!readings[i].contact) continue;
-        sum[i] = sum[i] + Vec2{readings[i].x_px, readings[i].y_px};
-        sum2[i] = sum2[i] +
-                  Vec2{readings[i].x_px * readings[i].x_px, readings[i].y_px * readings[i].y_px};
-        g[i] += readings[i].G;
-        n[i] += 1;
-      }
-      step();
-    }
-    for (std::size_t i = 0; i < pos.size(); ++i) {
-      if (n[i] == 0) {
+      if (t.n[i] == 0) {
         throw std::runtime_error(fmt::format(
             "the element at {} is never in contact (G below contact.on {:.0f} in every frame): "
             "press harder, or give a lower --contact-on",
             at(pos[i]), cal.contact_on));
       }
-      const double k = static_cast<double>(n[i]);
-      pos[i] = {sum[i].x / k, sum[i].y / k};
+      const double k = static_cast<double>(t.n[i]);
+      pos[i] = {t.sum[i].x / k, t.sum[i].y / k};
       found[i].position = pos[i];
-      found[i].frames = n[i];
-      found[i].G = g[i] / k;
-      const double vx = std::max(sum2[i].x / k - pos[i].x * pos[i].x, 0.0);
-      const double vy = std::max(sum2[i].y / k - pos[i].y * pos[i].y, 0.0);
-      found[i].spread_px = n[i] > 1 ? std::sqrt((vx + vy) / (k - 1)) : 0.0;
+      found[i].frames = t.n[i];
+      found[i].G = t.g[i] / k;
+      const double vx = std::max(t.sum2[i].x / k - pos[i].x * pos[i].x, 0.0);
+      const double vy = std::max(t.sum2[i].y / k - pos[i].y * pos[i].y, 0.0);
+      found[i].spread_px = t.n[i] > 1 ? std::sqrt((vx + vy) / (k - 1)) : 0.0;
     }
   }
+  return found;
+}
 
-  // --- order and normals ---------------------------------------------------------------------
-  Vec2 center{0, 0};
-  for (const Vec2& p : pos)
-    center = center + p;
-  center = (1.0 / static_cast<double>(pos.size())) * center;
-  if (o.center) center = *o.center;
-  result.center = center;
-  const double gap = o.ring_gap_px > 0 ? o.ring_gap_px : radius;
+// Elements in calibration order: groups (rings or rows) in order, each sorted; azimuth in
+// radians (rings only).
+struct Order {
   std::vector<std::vector<std::size_t>> groups;
-  std::vector<double> azimuth(pos.size(), 0.0);
-  if (o.order == ElementOrder::kRings) {
-    std::vector<double> rho(pos.size());
-    for (std::size_t i = 0; i < pos.size(); ++i) {
-      const Vec2 d = pos[i] - center;
-      rho[i] = norm(d);
-      found[i].radius_from_center = rho[i];
-      const double phi = std::atan2(d.y, d.x);
-      azimuth[i] = (o.mirror ? -phi : phi) + o.azimuth_offset_deg * kPi / 180.0;
-    }
-    groups = group_by_gap(rho, gap);
-    for (auto& ring : groups) {
-      // Azimuth in [-q, 2 pi - q) with q a quarter of the ring's step: an element drawn at 0
-      // degrees stays first whatever the noise.
-      const double q = kPi / (2.0 * static_cast<double>(ring.size()));
-      const auto key = [&](std::size_t i) {
-        double a = std::fmod(azimuth[i] + q, 2 * kPi);
-        if (a < 0) a += 2 * kPi;
-        return a - q;
-      };
-      for (std::size_t i : ring)
-        azimuth[i] = key(i);
-      std::sort(ring.begin(), ring.end(),
-                [&](std::size_t a, std::size_t b) { return azimuth[a] < azimuth[b]; });
-    }
-  } else {
-    std::vector<double> ys(pos.size());
-    for (std::size_t i = 0; i < pos.size(); ++i)
-      ys[i] = pos[i].y;
-    groups = group_by_gap(ys, gap);
-    for (auto& row : groups)
-      std::sort(row.begin(), row.end(),
-                [&](std::size_t a, std::size_t b) { return pos[a].x < pos[b].x; });
+  std::vector<double> azimuth;
+};
+
+// Rings by radius from the centre, then azimuth. Sets each element's radius_from_center.
+Order order_rings(const std::vector<Vec2>& pos, Vec2 center, double gap, const LayoutOptions& o,
+                  std::vector<FoundElement>& found) {
+  Order order;
+  order.azimuth.assign(pos.size(), 0.0);
+  std::vector<double>& azimuth = order.azimuth;
+  std::vector<double> rho(pos.size());
+  for (std::size_t i = 0; i < pos.size(); ++i) {
+    const Vec2 d = pos[i] - center;
+    rho[i] = norm(d);
+    found[i].radius_from_center = rho[i];
+    const double phi = std::atan2(d.y, d.x);
+    azimuth[i] = (o.mirror ? -phi : phi) + o.azimuth_offset_deg * kPi / 180.0;
   }
-  for (const auto& group : groups)
-    result.group_counts.push_back(static_cast<int>(group.size()));
+  order.groups = group_by_gap(rho, gap);
+  for (auto& ring : order.groups) {
+    // Azimuth in [-q, 2 pi - q) with q a quarter of the ring's step: an element drawn at 0
+    // degrees stays first whatever the noise.
+    const double q = kPi / (2.0 * static_cast<double>(ring.size()));
+    const auto key = [&](std::size_t i) {
+      double a = std::fmod(azimuth[i] + q, 2 * kPi);
+      if (a < 0) a += 2 * kPi;
+      return a - q;
+    };
+    for (std::size_t i : ring)
+      azimuth[i] = key(i);
+    std::sort(ring.begin(), ring.end(),
+              [&](std::size_t a, std::size_t b) { return azimuth[a] < azimuth[b]; });
+  }
+  return order;
+}
+
+// Rows by y, then x.
+Order order_rows(const std::vector<Vec2>& pos, double gap) {
+  Order order;
+  order.azimuth.assign(pos.size(), 0.0);
+  std::vector<double> ys(pos.size());
+  for (std::size_t i = 0; i < pos.size(); ++i)
+    ys[i] = pos[i].y;
+  order.groups = group_by_gap(ys, gap);
+  for (auto& row : order.groups)
+    std::sort(row.begin(), row.end(),
+              [&](std::size_t a, std::size_t b) { return pos[a].x < pos[b].x; });
+  return order;
+}
+
+// Refusals: groups other than --rings, --ring-polar-deg that does not fit the rings.
+void check_groups(const LayoutResult& result, const LayoutOptions& o, std::size_t groups,
+                  double gap) {
   const char* group_name = o.order == ElementOrder::kRings ? "rings" : "rows";
   if (!o.ring_counts.empty() && o.ring_counts != result.group_counts) {
     throw std::runtime_error(fmt::format(
         "the {} found hold {} elements, --rings says {} (a new {} starts where positions differ "
         "by more than {} px: --ring-gap; the layout centre is {}: --center)",
         group_name, join(result.group_counts), join(o.ring_counts),
-        o.order == ElementOrder::kRings ? "ring" : "row", gap, at(center)));
+        o.order == ElementOrder::kRings ? "ring" : "row", gap, at(result.center)));
   }
-  result.dome_normals = !o.ring_polar_deg.empty();
-  if (result.dome_normals) {
-    if (o.order != ElementOrder::kRings)
-      throw std::invalid_argument("--ring-polar-deg needs --order rings");
-    if (o.ring_polar_deg.size() != groups.size()) {
-      throw std::runtime_error(
-          fmt::format("--ring-polar-deg gives {} rings, the layout has {} (holding {} elements)",
-                      o.ring_polar_deg.size(), groups.size(), join(result.group_counts)));
-    }
+  if (!result.dome_normals) return;
+  if (o.order != ElementOrder::kRings)
+    throw std::invalid_argument("--ring-polar-deg needs --order rings");
+  if (o.ring_polar_deg.size() != groups) {
+    throw std::runtime_error(
+        fmt::format("--ring-polar-deg gives {} rings, the layout has {} (holding {} elements)",
+                    o.ring_polar_deg.size(), groups, join(result.group_counts)));
   }
+}
+
+// The elements in order into the calibration and the result, with ids, rings and normals (the
+// dome model, or [0, 0, 1]).
+void add_elements(const Order& order, const std::vector<FoundElement>& found, double radius,
+                  const LayoutOptions& o, Calibration& cal, LayoutResult& result) {
   std::uint32_t id = 0;
-  for (std::size_t gi = 0; gi < groups.size(); ++gi) {
-    for (std::size_t i : groups[gi]) {
+  for (std::size_t gi = 0; gi < order.groups.size(); ++gi) {
+    for (std::size_t i : order.groups[gi]) {
+      const double azimuth = order.azimuth[i];
       FoundElement f = found[i];
       f.id = id++;
       f.ring = static_cast<int>(gi);
-      f.azimuth_deg = o.order == ElementOrder::kRings ? azimuth[i] * 180.0 / kPi : 0.0;
+      f.azimuth_deg = o.order == ElementOrder::kRings ? azimuth * 180.0 / kPi : 0.0;
       ElementCalibration e;
       e.id = f.id;
       e.center_px = f.position;
@@ -627,13 +700,56 @@ LayoutResult find_layout(const LayoutInput& in, const LayoutOptions& o, const Pr
       e.zero_px = f.position;
       if (result.dome_normals) {
         const double t = o.ring_polar_deg[gi] * kPi / 180.0;
-        e.normal = {std::sin(t) * std::cos(azimuth[i]), std::sin(t) * std::sin(azimuth[i]),
-                    std::cos(t)};
+        e.normal = {std::sin(t) * std::cos(azimuth), std::sin(t) * std::sin(azimuth), std::cos(t)};
       }
       cal.elements.push_back(e);
       result.elements.push_back(f);
     }
   }
+}
+
+Vec2 mean_position(const std::vector<Vec2>& pos) {
+  Vec2 center{0, 0};
+  for (const Vec2& p : pos)
+    center = center + p;
+  return (1.0 / static_cast<double>(pos.size())) * center;
+}
+
+}  // namespace
+
+LayoutResult find_layout(const LayoutInput& in, const LayoutOptions& o, const Progress& progress) {
+  if (in.frames.empty()) throw std::invalid_argument("no frames given");
+  check_options(o);
+  check_sizes(in);
+  FrameProgress frames(progress, in.frames.size());
+
+  LayoutResult result;
+  const Plane reference = no_load_plane(in);
+  result.noise_sigma = frame_noise(in, reference);
+  Calibration cal = thresholds_for(in.frames.front(), o, result.noise_sigma);
+
+  Plane preview;
+  const std::vector<Cluster> clusters =
+      find_spots(in, o, reference, cal.contact_off, frames, preview);
+  result.increment_preview = to_preview(preview);
+  check_count(clusters, o);
+  const double radius = disk_radius(clusters, o, cal);
+
+  std::vector<Vec2> pos;
+  for (const Cluster& c : clusters)
+    pos.push_back(c.mean());
+  std::vector<FoundElement> found = measure_positions(pos, radius, cal, in, o, reference, frames);
+
+  result.center = o.center ? *o.center : mean_position(pos);
+  const double gap = o.ring_gap_px > 0 ? o.ring_gap_px : radius;
+  const Order order = o.order == ElementOrder::kRings
+                          ? order_rings(pos, result.center, gap, o, found)
+                          : order_rows(pos, gap);
+  for (const auto& group : order.groups)
+    result.group_counts.push_back(static_cast<int>(group.size()));
+  result.dome_normals = !o.ring_polar_deg.empty();
+  check_groups(result, o, order.groups.size(), gap);
+  add_elements(order, found, radius, o, cal, result);
   validate(cal);
   result.calibration = std::move(cal);
   return result;

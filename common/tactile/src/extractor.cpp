@@ -308,7 +308,7 @@ ReferenceResult Extractor::complete_reference() {
   }
 
   ref_q_ = std::move(mean_q);
-  build_thresholds();
+  build_block_tables();
   const PixelFormat fmt = cal_.bit_depth == 8 ? PixelFormat::kMono8 : PixelFormat::kMono16;
   reference_image_ = Image(cal_.width, cal_.height, fmt);
   for (int y = 0; y < cal_.height; ++y) {
@@ -325,28 +325,25 @@ ReferenceResult Extractor::complete_reference() {
   return {ReferenceStatus::kComplete, frames, 0, 0};
 }
 
-void Extractor::build_thresholds() {
-  const std::int64_t max_level = cal_.bit_depth == 8 ? 255 : 65535;
+void Extractor::build_block_tables() {
   // No pixel passes this threshold: 256 * 65535 < it.
   constexpr std::int32_t kNever = (65535 << kQBits) + 1;
-  thr_q_.resize(ref_q_.size());
-  for (std::size_t k = 0; k < ref_q_.size(); ++k)
-    thr_q_[k] = ref_q_[k] + floor_q_;
   const std::size_t n =
       blocks_.empty() ? 0
                       : blocks_.back().offset + static_cast<std::size_t>(blocks_.back().width) *
                                                     static_cast<std::size_t>(blocks_.back().height);
-  blk_thr_.assign(n, kNever);
-  blk_ref_.assign(n, detail::kOutsideDisk);
-  blk_lo_.assign(n, 0);
+  BlockTables& t = tables_;
+  t.thr.assign(n, kNever);
+  t.ref.assign(n, detail::kOutsideDisk);
+  t.thr_lo.assign(n, 0);
   if (cal_.bit_depth == 8) {
-    blk_hi8_.assign(n, 255);
-    blk_thr16_.assign(n, 65535);
-    blk_ref16_.assign(n, 65535);
-    blk_ref_hi8_.assign(n, 255);
-    blk_ref_lo_.assign(n, 0);
+    t.thr_hi8.assign(n, 255);
+    t.thr16.assign(n, 65535);
+    t.ref16.assign(n, 65535);
+    t.ref_hi8.assign(n, 255);
+    t.ref_lo.assign(n, 0);
   } else {
-    blk_hi16_.assign(n, 65535);
+    t.thr_hi16.assign(n, 65535);
   }
   for (std::size_t i = 0; i < layout_.size(); ++i) {
     const ElementLayout& el = layout_[i];
@@ -354,41 +351,47 @@ void Extractor::build_thresholds() {
     for (std::uint32_t s = el.span_begin; s < el.span_end; ++s) {
       const Span& sp = spans_[s];
       for (int x = sp.x0; x < sp.x1; ++x) {
-        const std::size_t k = sp.ref_offset + static_cast<std::size_t>(x - sp.x0);
         const std::size_t at =
             b.offset + static_cast<std::size_t>(sp.y - b.y0) * static_cast<std::size_t>(b.width) +
             static_cast<std::size_t>(x - b.x0);
-        const std::int64_t t = thr_q_[k];
-        blk_thr_[at] = thr_q_[k];
-        blk_ref_[at] = ref_q_[k];
-        // t >> 8 beyond the largest level: no pixel passes, and hi = max_level says the same.
-        const std::int64_t hi = std::min<std::int64_t>(t >> kQBits, max_level);
-        blk_lo_[at] = static_cast<std::uint8_t>(t & 0xFF);
-        if (cal_.bit_depth == 8) {
-          blk_hi8_[at] = static_cast<std::uint8_t>(hi);
-          blk_thr16_[at] = static_cast<std::uint16_t>(std::min<std::int64_t>(t, 65535));
-          blk_ref16_[at] = static_cast<std::uint16_t>(std::min<std::int32_t>(ref_q_[k], 65535));
-          blk_ref_hi8_[at] = static_cast<std::uint8_t>(std::min(ref_q_[k] >> kQBits, 255));
-          blk_ref_lo_[at] = static_cast<std::uint8_t>(ref_q_[k] & 0xFF);
-        } else {
-          blk_hi16_[at] = static_cast<std::uint16_t>(hi);
-        }
+        set_block_pixel(at, ref_q_[sp.ref_offset + static_cast<std::size_t>(x - sp.x0)]);
       }
     }
   }
 }
 
+void Extractor::set_block_pixel(std::size_t at, std::int32_t ref_q) {
+  const std::int64_t max_level = cal_.bit_depth == 8 ? 255 : 65535;
+  const std::int32_t thr_q = ref_q + floor_q_;
+  const std::int64_t t = thr_q;
+  BlockTables& tb = tables_;
+  tb.thr[at] = thr_q;
+  tb.ref[at] = ref_q;
+  // t >> 8 beyond the largest level: no pixel passes, and hi = max_level says the same.
+  const std::int64_t hi = std::min<std::int64_t>(t >> kQBits, max_level);
+  tb.thr_lo[at] = static_cast<std::uint8_t>(t & 0xFF);
+  if (cal_.bit_depth == 8) {
+    tb.thr_hi8[at] = static_cast<std::uint8_t>(hi);
+    tb.thr16[at] = static_cast<std::uint16_t>(std::min<std::int64_t>(t, 65535));
+    tb.ref16[at] = static_cast<std::uint16_t>(std::min<std::int32_t>(ref_q, 65535));
+    tb.ref_hi8[at] = static_cast<std::uint8_t>(std::min(ref_q >> kQBits, 255));
+    tb.ref_lo[at] = static_cast<std::uint8_t>(ref_q & 0xFF);
+  } else {
+    tb.thr_hi16[at] = static_cast<std::uint16_t>(hi);
+  }
+}
+
 detail::BlockData Extractor::block_data() const noexcept {
   detail::BlockData d;
-  d.thr = blk_thr_.data();
-  d.ref = blk_ref_.data();
-  d.thr16 = blk_thr16_.data();
-  d.ref16 = blk_ref16_.data();
-  d.thr_hi8 = blk_hi8_.data();
-  d.thr_lo = blk_lo_.data();
-  d.thr_hi16 = blk_hi16_.data();
-  d.ref_hi8 = blk_ref_hi8_.data();
-  d.ref_lo = blk_ref_lo_.data();
+  d.thr = tables_.thr.data();
+  d.ref = tables_.ref.data();
+  d.thr16 = tables_.thr16.data();
+  d.ref16 = tables_.ref16.data();
+  d.thr_hi8 = tables_.thr_hi8.data();
+  d.thr_lo = tables_.thr_lo.data();
+  d.thr_hi16 = tables_.thr_hi16.data();
+  d.ref_hi8 = tables_.ref_hi8.data();
+  d.ref_lo = tables_.ref_lo.data();
   return d;
 }
 
@@ -407,8 +410,10 @@ detail::FrameRef frame_ref(const ImageView& f) {
 }  // namespace
 
 template <typename Pixel>
-bool Extractor::windowed_pass(const ElementLayout& el, const ImageView& f, double& x, double& y,
+bool Extractor::windowed_pass(std::size_t element, const ImageView& f, double& x, double& y,
                               double half) const noexcept {
+  const ElementLayout& el = layout_[element];
+  const detail::Block& b = blocks_[element];
   const double reach = half + 0.5;
   const int col_lo = static_cast<int>(std::ceil(x - reach));
   const int col_hi = static_cast<int>(std::floor(x + reach));
@@ -422,11 +427,14 @@ bool Extractor::windowed_pass(const ElementLayout& el, const ImageView& f, doubl
     const int xa = std::max(sp.x0, col_lo);
     const int xb = std::min(sp.x1, col_hi + 1);
     const Pixel* row = f.row<Pixel>(sp.y - f.origin_y);
-    const std::int32_t* thr = thr_q_.data() + sp.ref_offset;
+    // The G threshold of the row's block pixels, from column b.x0 on.
+    const std::int32_t* thr =
+        tables_.thr.data() + b.offset +
+        static_cast<std::size_t>(sp.y - b.y0) * static_cast<std::size_t>(b.width);
     double r0 = 0;
     double rx = 0;
     for (int px = xa; px < xb; ++px) {
-      const std::int32_t w = std::max(q8(row[px - f.origin_x]) - thr[px - sp.x0], 0);
+      const std::int32_t w = std::max(q8(row[px - f.origin_x]) - thr[px - b.x0], 0);
       if (w == 0) continue;
       const double wf = w * soft_edge(half, px - x);
       r0 += wf;
@@ -504,23 +512,116 @@ bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x
   return std::isfinite(x) && std::isfinite(y);
 }
 
+namespace {
+
+// The weights of the first centroid, the one every estimator starts from.
+detail::MomentKind start_moments(CentroidEstimator e) noexcept {
+  switch (e) {
+    case CentroidEstimator::kPlain:
+      return detail::MomentKind::kPlain;
+    case CentroidEstimator::kThresholded:
+      return detail::MomentKind::kThresholded;
+    case CentroidEstimator::kWindowed:
+      return detail::MomentKind::kThresholdedCount;
+    case CentroidEstimator::kGaussian:
+      return detail::MomentKind::kStart;
+  }
+  return detail::MomentKind::kThresholded;
+}
+
+}  // namespace
+
+template <typename Pixel>
+void Extractor::gaussian_refine(std::size_t element, const ImageView& f, const detail::Moments& m,
+                                double g, Vec2& p) noexcept {
+  const ElementCalibration& ec = cal_.elements[element];
+  // Width of the weight from the spot: for a Gaussian of peak A above a floor f,
+  // G = 2 pi sigma^2 (A - f - f ln(A / f)). The peak increment is the largest excess over
+  // the threshold (whole gray levels) plus the floor.
+  const double fl = cal_.noise_floor;
+  const double peak = m.peak > 0 ? m.peak + fl : 0.0;
+  const double shape = fl > 0 ? peak - fl - fl * std::log(std::max(peak / fl, 1.0)) : peak;
+  double sigma = shape > 0.05 * peak && shape > 0 ? std::sqrt(g / (2 * std::numbers::pi * shape))
+                                                  : ec.radius_px / 4;
+  sigma = std::clamp(sigma, 0.6, std::max(0.6, ec.radius_px / 2));
+  double gx = p.x;
+  double gy = p.y;
+  const double sigma_before = sigma;
+  if (!gaussian_pass<Pixel>(element, f, gx, gy, sigma)) return;
+  // A weight far from the spot's width loses efficiency: once more with the better width.
+  if (std::abs(sigma - sigma_before) > 0.25 * sigma_before) {
+    sigma = std::clamp(sigma, 0.6, std::max(0.6, ec.radius_px / 2));
+    double hx = p.x;
+    double hy = p.y;
+    if (gaussian_pass<Pixel>(element, f, hx, hy, sigma)) {
+      gx = hx;
+      gy = hy;
+    }
+  }
+  // Keep the estimate only inside the disk; the thresholded centroid always is.
+  const double dx = gx - ec.center_px.x;
+  const double dy = gy - ec.center_px.y;
+  if (dx * dx + dy * dy <= ec.radius_px * ec.radius_px) p = {gx, gy};
+}
+
+template <typename Pixel>
+Vec2 Extractor::centroid(std::size_t element, const ImageView& f, const detail::Moments& m,
+                         double g) noexcept {
+  const detail::Block& blk = blocks_[element];
+  Vec2 p{blk.x0 + static_cast<double>(m.cx) / static_cast<double>(m.c0),
+         blk.y0 + static_cast<double>(m.cy) / static_cast<double>(m.c0)};
+  switch (opt_.estimator) {
+    case CentroidEstimator::kPlain:
+    case CentroidEstimator::kThresholded:
+      break;
+    case CentroidEstimator::kWindowed: {
+      const double half =
+          std::sqrt(static_cast<double>(m.above) / std::numbers::pi) + opt_.window_margin_px;
+      windowed_pass<Pixel>(element, f, p.x, p.y, half);
+      break;
+    }
+    case CentroidEstimator::kGaussian:
+      gaussian_refine<Pixel>(element, f, m, g, p);
+      break;
+  }
+  return p;
+}
+
+inline void Extractor::record_contact(std::size_t element, Vec2 p, double g,
+                                      std::uint32_t gap) noexcept {
+  const double mm = cal_.mm_per_px;
+  const ElementCalibration& ec = cal_.elements[element];
+  ElementState& st = state_[element];
+  ElementReading& r = readings_[element];
+  r.x_px = p.x;
+  r.y_px = p.y;
+  r.ux_mm = (p.x - ec.zero_px.x) * mm;
+  r.uy_mm = (p.y - ec.zero_px.y) * mm;
+  r.fz = cal_.normal_curve(g);
+  r.fx = cal_.shear_curve.odd(r.ux_mm);
+  r.fy = cal_.shear_curve.odd(r.uy_mm);
+  if (st.contact && gap > 0) {
+    r.has_displacement = true;
+    r.dx_mm = (p.x - st.x_px) * mm / gap;
+    r.dy_mm = (p.y - st.y_px) * mm / gap;
+  }
+  st.contact = true;
+  st.x_px = p.x;
+  st.y_px = p.y;
+}
+
 template <typename Pixel>
 void Extractor::measure_all(const ImageView& f, std::uint32_t gap) noexcept {
-  const double mm = cal_.mm_per_px;
   const detail::FrameRef fr = frame_ref(f);
   const detail::BlockData data = block_data();
-  const bool plain = opt_.estimator == CentroidEstimator::kPlain;
-  const bool windowed = opt_.estimator == CentroidEstimator::kWindowed;
-  const bool gaussian = opt_.estimator == CentroidEstimator::kGaussian;
+  const detail::MomentKind kind = start_moments(opt_.estimator);
   for (std::size_t i = 0; i < layout_.size(); ++i) {
-    const ElementLayout& el = layout_[i];
-    const ElementCalibration& ec = cal_.elements[i];
     ElementState& st = state_[i];
     ElementReading& r = readings_[i];
     const detail::Block& blk = blocks_[i];
 
     r = ElementReading{};
-    r.id = ec.id;
+    r.id = cal_.elements[i].id;
     // An element out of contact first gets its exact G on narrow integers, about the cost of
     // reading its pixels; only if that reaches contact.on does it get the full pass.
     if (!st.contact) {
@@ -533,10 +634,6 @@ void Extractor::measure_all(const ImageView& f, std::uint32_t gap) noexcept {
         continue;
       }
     }
-    const detail::MomentKind kind = plain      ? detail::MomentKind::kPlain
-                                    : windowed ? detail::MomentKind::kThresholdedCount
-                                    : gaussian ? detail::MomentKind::kStart
-                                               : detail::MomentKind::kThresholded;
     const detail::Moments m = sizeof(Pixel) == 1 ? kernels_->moments_u8(blk, fr, data, kind)
                                                  : kernels_->moments_u16(blk, fr, data, kind);
     // The next element's rows start loading while this one is worked on (about a tenth of the
@@ -551,61 +648,7 @@ void Extractor::measure_all(const ImageView& f, std::uint32_t gap) noexcept {
       st = ElementState{};
       continue;
     }
-    double x = blk.x0 + static_cast<double>(m.cx) / static_cast<double>(m.c0);
-    double y = blk.y0 + static_cast<double>(m.cy) / static_cast<double>(m.c0);
-    if (windowed) {
-      const double half =
-          std::sqrt(static_cast<double>(m.above) / std::numbers::pi) + opt_.window_margin_px;
-      windowed_pass<Pixel>(el, f, x, y, half);
-    } else if (gaussian) {
-      // Width of the weight from the spot: for a Gaussian of peak A above a floor f,
-      // G = 2 pi sigma^2 (A - f - f ln(A / f)). The peak increment is the largest excess over
-      // the threshold (whole gray levels) plus the floor.
-      const double fl = cal_.noise_floor;
-      const double peak = m.peak > 0 ? m.peak + fl : 0.0;
-      const double shape = fl > 0 ? peak - fl - fl * std::log(std::max(peak / fl, 1.0)) : peak;
-      double sigma = shape > 0.05 * peak && shape > 0
-                         ? std::sqrt(g / (2 * std::numbers::pi * shape))
-                         : ec.radius_px / 4;
-      sigma = std::clamp(sigma, 0.6, std::max(0.6, ec.radius_px / 2));
-      double gx = x;
-      double gy = y;
-      const double sigma_before = sigma;
-      if (gaussian_pass<Pixel>(i, f, gx, gy, sigma)) {
-        // A weight far from the spot's width loses efficiency: once more with the better width.
-        if (std::abs(sigma - sigma_before) > 0.25 * sigma_before) {
-          sigma = std::clamp(sigma, 0.6, std::max(0.6, ec.radius_px / 2));
-          double hx = x;
-          double hy = y;
-          if (gaussian_pass<Pixel>(i, f, hx, hy, sigma)) {
-            gx = hx;
-            gy = hy;
-          }
-        }
-        // Keep the estimate only inside the disk; the thresholded centroid always is.
-        const double dx = gx - ec.center_px.x;
-        const double dy = gy - ec.center_px.y;
-        if (dx * dx + dy * dy <= ec.radius_px * ec.radius_px) {
-          x = gx;
-          y = gy;
-        }
-      }
-    }
-    r.x_px = x;
-    r.y_px = y;
-    r.ux_mm = (x - ec.zero_px.x) * mm;
-    r.uy_mm = (y - ec.zero_px.y) * mm;
-    r.fz = cal_.normal_curve(g);
-    r.fx = cal_.shear_curve.odd(r.ux_mm);
-    r.fy = cal_.shear_curve.odd(r.uy_mm);
-    if (st.contact && gap > 0) {
-      r.has_displacement = true;
-      r.dx_mm = (x - st.x_px) * mm / gap;
-      r.dy_mm = (y - st.y_px) * mm / gap;
-    }
-    st.contact = true;
-    st.x_px = x;
-    st.y_px = y;
+    record_contact(i, centroid<Pixel>(i, f, m, g), g, gap);
   }
 }
 

@@ -370,6 +370,99 @@ void World::update_cap_place() noexcept {
   cap_.place = CapPlace::kFree;
 }
 
+// Supports: the table top, and the bottle neck under a cap that meets it.
+World::Supports World::support_forces(Vec3& force, double inertia) const noexcept {
+  const double bottom = cap_.position_m.z - p_.cap.height_m / 2.0;
+  const Vec3 to_axis{p_.bottle.x_m - cap_.position_m.x, p_.bottle.y_m - cap_.position_m.y, 0};
+  const double off_axis = std::hypot(to_axis.x, to_axis.y);
+  Supports s;
+  if (bottom < 0) {
+    s.table_n = std::max(
+        0.0, -p_.table_stiffness_npm * bottom - p_.table_damping_nspm * cap_.velocity_mps.z);
+    force.z += s.table_n;
+    s.friction_torque_max = p_.cap.table_friction * s.table_n * (2.0 / 3.0) * p_.cap.radius_m;
+  }
+  const bool on_neck = cap_.place == CapPlace::kOnBottle || cap_.place == CapPlace::kThreaded ||
+                       (off_axis < p_.cap.radius_m && bottom < p_.bottle.height_m &&
+                        bottom > p_.bottle.height_m - 0.003);
+  if (!on_neck) return s;
+  const double pen = p_.bottle.height_m - bottom;
+  double fz = p_.seat_stiffness_npm * pen - p_.seat_damping_nspm * cap_.velocity_mps.z;
+  // Before the thread engages the neck only pushes; after, it holds the cap both ways.
+  if (cap_.place != CapPlace::kThreaded) fz = std::max(0.0, fz);
+  force.z += fz;
+  if (off_axis < p_.bottle.capture_radius_m || cap_.place == CapPlace::kThreaded) {
+    force.x += p_.seat_stiffness_npm * to_axis.x - p_.seat_damping_nspm * cap_.velocity_mps.x;
+    force.y += p_.seat_stiffness_npm * to_axis.y - p_.seat_damping_nspm * cap_.velocity_mps.y;
+  }
+  if (cap_.place == CapPlace::kThreaded) {
+    const double sign = p_.bottle.tighten_clockwise ? -1.0 : 1.0;
+    const double over = cap_.angle_deg - p_.bottle.free_turn_deg;
+    if (over > 0) {
+      const double rate = sign * cap_.yaw_rate_rps;
+      const double k = p_.bottle.tight_stiffness_nm_per_rad;
+      const double damping = 2.0 * std::sqrt(k * inertia);
+      s.thread_torque = -sign * (k * over * kPi / 180.0 + damping * std::max(rate, 0.0));
+    }
+    s.friction_torque_max += p_.bottle.free_torque_nm;
+  }
+  return s;
+}
+
+// Semi-implicit Euler; the table's and thread's Coulomb friction by the implicit regularised
+// form: a viscous law stiff enough to hold, capped at the Coulomb value.
+void World::integrate_cap(Vec3 force, double torque, const Supports& s, double inertia,
+                          double dt) noexcept {
+  const double m = p_.cap.mass_kg;
+  const double eps = p_.slip_speed_eps_mps;
+  Vec3 v = cap_.velocity_mps + (dt / m) * force;
+  if (s.table_n > 0) {
+    const double c = p_.cap.table_friction * s.table_n / eps;
+    const Vec3 vh{v.x, v.y, 0};
+    const Vec3 vh_new = (1.0 / (1.0 + dt * c / m)) * vh;
+    Vec3 fr = (m / dt) * (vh_new - vh);
+    fr = clamp_norm(fr, p_.cap.table_friction * s.table_n);
+    v = v + (dt / m) * fr;
+  }
+  double w = cap_.yaw_rate_rps + dt * torque / inertia;
+  if (s.friction_torque_max > 0) {
+    const double c = s.friction_torque_max * p_.cap.radius_m / eps;
+    const double w_new = w / (1.0 + dt * c / inertia);
+    const double tf =
+        std::clamp((w_new - w) * inertia / dt, -s.friction_torque_max, s.friction_torque_max);
+    w += dt * tf / inertia;
+  }
+  cap_.velocity_mps = v;
+  cap_.yaw_rate_rps = w;
+  cap_.position_m = cap_.position_m + dt * v;
+  cap_.yaw_rad += dt * w;
+  cap_.thread_torque_nm = s.thread_torque;
+}
+
+bool World::state_finite() const noexcept {
+  bool ok = finite(cap_.position_m) && finite(cap_.velocity_mps) && std::isfinite(cap_.yaw_rad) &&
+            std::isfinite(cap_.yaw_rate_rps) && finite(arm_.position_m);
+  for (const Fingertip& t : tips_) {
+    for (const Element& e : t.elements) {
+      ok = ok && std::isfinite(e.fn_n) && std::isfinite(e.s_mm[0]) && std::isfinite(e.s_mm[1]);
+    }
+  }
+  return ok;
+}
+
+// After a step that left something non-finite: the last finite state, every feeler let go.
+void World::roll_back(const ArmState& arm, const CapState& cap, double dt) noexcept {
+  arm_ = arm;
+  cap_ = cap;
+  for (Fingertip& t : tips_) {
+    for (Element& e : t.elements) {
+      e = Element{e.tip_f, e.normal_f};
+    }
+  }
+  place_fingertips();
+  t_ -= dt;
+}
+
 bool World::step(double dt) noexcept {
   if (!(dt > 0) || !std::isfinite(dt)) return false;
   const ArmState arm_before = arm_;
@@ -382,102 +475,19 @@ bool World::step(double dt) noexcept {
   Vec3 force{0, 0, -p_.cap.mass_kg * p_.gravity_mps2};
   double torque = 0;
   contact_forces(force, torque, dt);
-
   const double m = p_.cap.mass_kg;
   const double inertia = p_.cap.inertia_factor * m * p_.cap.radius_m * p_.cap.radius_m;
-  const double half_h = p_.cap.height_m / 2.0;
-  const double bottom = cap_.position_m.z - half_h;
-  const Vec3 to_axis{p_.bottle.x_m - cap_.position_m.x, p_.bottle.y_m - cap_.position_m.y, 0};
-  const double off_axis = std::hypot(to_axis.x, to_axis.y);
-
-  // Supports: the table top, and the bottle neck under a cap that meets it.
-  double support_n = 0;  // normal force of the table (for its friction)
-  double friction_torque_max = 0;
-  double thread_torque = 0;
-  if (bottom < 0) {
-    support_n = std::max(
-        0.0, -p_.table_stiffness_npm * bottom - p_.table_damping_nspm * cap_.velocity_mps.z);
-    force.z += support_n;
-    friction_torque_max = p_.cap.table_friction * support_n * (2.0 / 3.0) * p_.cap.radius_m;
-  }
-  const bool on_neck = cap_.place == CapPlace::kOnBottle || cap_.place == CapPlace::kThreaded ||
-                       (off_axis < p_.cap.radius_m && bottom < p_.bottle.height_m &&
-                        bottom > p_.bottle.height_m - 0.003);
-  if (on_neck) {
-    const double pen = p_.bottle.height_m - bottom;
-    double fz = p_.seat_stiffness_npm * pen - p_.seat_damping_nspm * cap_.velocity_mps.z;
-    // Before the thread engages the neck only pushes; after, it holds the cap both ways.
-    if (cap_.place != CapPlace::kThreaded) fz = std::max(0.0, fz);
-    force.z += fz;
-    if (off_axis < p_.bottle.capture_radius_m || cap_.place == CapPlace::kThreaded) {
-      force.x += p_.seat_stiffness_npm * to_axis.x - p_.seat_damping_nspm * cap_.velocity_mps.x;
-      force.y += p_.seat_stiffness_npm * to_axis.y - p_.seat_damping_nspm * cap_.velocity_mps.y;
-    }
-    if (cap_.place == CapPlace::kThreaded) {
-      const double sign = p_.bottle.tighten_clockwise ? -1.0 : 1.0;
-      const double over = cap_.angle_deg - p_.bottle.free_turn_deg;
-      if (over > 0) {
-        const double rate = sign * cap_.yaw_rate_rps;
-        const double k = p_.bottle.tight_stiffness_nm_per_rad;
-        const double damping = 2.0 * std::sqrt(k * inertia);
-        thread_torque = -sign * (k * over * kPi / 180.0 + damping * std::max(rate, 0.0));
-      }
-      friction_torque_max += p_.bottle.free_torque_nm;
-    }
-  }
-  torque += thread_torque;
-
-  // Semi-implicit Euler; the table's and thread's Coulomb friction by the implicit regularised
-  // form: a viscous law stiff enough to hold, capped at the Coulomb value.
-  const double eps = p_.slip_speed_eps_mps;
-  Vec3 v = cap_.velocity_mps + (dt / m) * force;
-  if (support_n > 0) {
-    const double c = p_.cap.table_friction * support_n / eps;
-    const Vec3 vh{v.x, v.y, 0};
-    const Vec3 vh_new = (1.0 / (1.0 + dt * c / m)) * vh;
-    Vec3 fr = (m / dt) * (vh_new - vh);
-    fr = clamp_norm(fr, p_.cap.table_friction * support_n);
-    v = v + (dt / m) * fr;
-  }
-  double w = cap_.yaw_rate_rps + dt * torque / inertia;
-  if (friction_torque_max > 0) {
-    const double c = friction_torque_max * p_.cap.radius_m / eps;
-    const double w_new = w / (1.0 + dt * c / inertia);
-    const double tf =
-        std::clamp((w_new - w) * inertia / dt, -friction_torque_max, friction_torque_max);
-    w += dt * tf / inertia;
-  }
-  cap_.velocity_mps = v;
-  cap_.yaw_rate_rps = w;
-  cap_.position_m = cap_.position_m + dt * v;
-  cap_.yaw_rad += dt * w;
-  cap_.thread_torque_nm = thread_torque;
+  const Supports supports = support_forces(force, inertia);
+  torque += supports.thread_torque;
+  integrate_cap(force, torque, supports, inertia, dt);
 
   update_tangential(dt);
   update_cap_place();
   t_ += dt;
 
-  bool ok = finite(cap_.position_m) && finite(cap_.velocity_mps) && std::isfinite(cap_.yaw_rad) &&
-            std::isfinite(cap_.yaw_rate_rps) && finite(arm_.position_m);
-  for (const Fingertip& t : tips_) {
-    for (const Element& e : t.elements) {
-      ok = ok && std::isfinite(e.fn_n) && std::isfinite(e.s_mm[0]) && std::isfinite(e.s_mm[1]);
-    }
-  }
-  if (!ok) {
-    // Never seen; if it happens, keep the last finite state and let go of every feeler.
-    arm_ = arm_before;
-    cap_ = cap_before;
-    for (Fingertip& t : tips_) {
-      for (Element& e : t.elements) {
-        e = Element{e.tip_f, e.normal_f};
-      }
-    }
-    place_fingertips();
-    t_ -= dt;
-    return false;
-  }
-  return true;
+  if (state_finite()) return true;
+  roll_back(arm_before, cap_before, dt);  // never seen
+  return false;
 }
 
 void World::clear_frame_accumulators() noexcept {

@@ -95,27 +95,12 @@ const std::vector<std::string>& controller_keys() {
   return keys;
 }
 
-Scenario parse_scenario(const std::string& text, const std::string& source) {
-  const Node root = config::parse_yaml(text, source);
-  if (!root.is_map()) root.fail("a scenario must be a mapping");
-  refuse_unknown(root, {"format", "seed", "camera", "cap", "bottle", "arm", "fingertip", "sensor",
-                        "sim", "controller"});
-  Scenario s;
-  s.source = source;
-  const Node format = root["format"];
-  if (format.as_string() != kScenarioFormat) {
-    format.fail(std::string("must be '") + kScenarioFormat + "', is " + format.text());
-  }
-  const Node seed = root["seed"];
-  const std::int64_t seed_value = seed.as_int();
-  if (seed_value < 0) seed.fail("must be a non-negative whole number, is " + seed.text());
-  s.seed = static_cast<std::uint64_t>(seed_value);
+namespace {
 
-  // camera (required: fps, width, height, bit_depth, noise_sigma)
-  const Node cam = root["camera"];
+// Required: fps, width, height, bit_depth, noise_sigma.
+void parse_camera(const Node& cam, CameraParams& c) {
   refuse_unknown(cam, {"fps", "width", "height", "bit_depth", "noise_sigma", "shot_noise_gain",
                        "background", "vignetting", "refresh_outside_disks"});
-  CameraParams& c = s.camera;
   c.fps = need(cam, "fps", 1.0, 1000.0);
   c.width = static_cast<int>(need(cam, "width", 160, 4096));
   c.height = static_cast<int>(need(cam, "height", 120, 4096));
@@ -129,12 +114,12 @@ Scenario parse_scenario(const std::string& text, const std::string& source) {
   c.background = want(cam, "background", c.background, 0.0, 200.0);
   c.vignetting = want(cam, "vignetting", c.vignetting, 0.0, 0.9);
   c.refresh_outside_disks = cam.get("refresh_outside_disks", c.refresh_outside_disks);
+}
 
-  // cap (required: mass_kg, radius_mm, friction)
-  const Node cap = root["cap"];
+// Required: mass_kg, radius_mm, friction.
+void parse_cap(const Node& cap, CapParams& cp) {
   refuse_unknown(cap, {"mass_kg", "radius_mm", "friction", "height_mm", "kinetic_ratio",
                        "inertia_factor", "x_m", "y_m", "table_friction"});
-  CapParams& cp = s.world.cap;
   cp.mass_kg = need(cap, "mass_kg", 1e-4, 1.0);
   cp.radius_m = need(cap, "radius_mm", 5.0, 50.0) / 1000.0;
   cp.friction = need(cap, "friction", 0.05, 3.0);
@@ -144,12 +129,12 @@ Scenario parse_scenario(const std::string& text, const std::string& source) {
   cp.x_m = want(cap, "x_m", cp.x_m, -2.0, 2.0);
   cp.y_m = want(cap, "y_m", cp.y_m, -2.0, 2.0);
   cp.table_friction = want(cap, "table_friction", cp.table_friction, 0.0, 3.0);
+}
 
-  // bottle (required: free_turn_deg)
-  const Node bottle = root["bottle"];
+// Required: free_turn_deg.
+void parse_bottle(const Node& bottle, BottleParams& bp) {
   refuse_unknown(bottle, {"free_turn_deg", "x_m", "y_m", "height_mm", "free_torque_nm",
                           "tight_stiffness_nm_per_rad", "capture_radius_mm", "tighten_clockwise"});
-  BottleParams& bp = s.world.bottle;
   bp.free_turn_deg = need(bottle, "free_turn_deg", 0.0, 3600.0);
   bp.x_m = want(bottle, "x_m", bp.x_m, -2.0, 2.0);
   bp.y_m = want(bottle, "y_m", bp.y_m, -2.0, 2.0);
@@ -160,14 +145,14 @@ Scenario parse_scenario(const std::string& text, const std::string& source) {
   bp.capture_radius_m =
       want(bottle, "capture_radius_mm", bp.capture_radius_m * 1000.0, 0.1, 20.0) / 1000.0;
   bp.tighten_clockwise = bottle.get("tighten_clockwise", bp.tighten_clockwise);
+}
 
-  // arm (required: vibration_mm, vibration_hz)
-  const Node arm = root["arm"];
+// Required: vibration_mm, vibration_hz.
+void parse_arm(const Node& arm, ArmParams& ap) {
   refuse_unknown(arm,
                  {"vibration_mm", "vibration_hz", "vibration_rise_s", "vibration_full_speed_mps",
                   "max_accel_mps2", "stop_decel_mps2", "max_yaw_accel_rps2", "stop_yaw_decel_rps2",
                   "finger_accel_mps2", "finger_open_mm", "start_m", "start_yaw_deg"});
-  ArmParams& ap = s.world.arm;
   ap.vibration_m = need(arm, "vibration_mm", 0.0, 5.0) / 1000.0;
   ap.vibration_hz = need(arm, "vibration_hz", 0.0, 200.0);
   ap.vibration_rise_s = want(arm, "vibration_rise_s", ap.vibration_rise_s, 0.0, 10.0);
@@ -185,71 +170,93 @@ Scenario parse_scenario(const std::string& text, const std::string& source) {
     ap.start_position_m = {v[0], v[1], v[2]};
   }
   ap.start_yaw_rad = want(arm, "start_yaw_deg", 0.0, -360.0, 360.0) * std::numbers::pi / 180.0;
+}
 
-  // fingertip (optional)
-  if (auto ft = root.find("fingertip")) {
-    refuse_unknown(*ft, {"dome_radius_mm", "ring_polar_deg", "normal_stiffness_n_per_mm",
-                         "normal_damping_nspm", "tangential_damping_nspm"});
-    FingertipParams& fp = s.world.fingertip;
-    fp.dome_radius_m = want(*ft, "dome_radius_mm", fp.dome_radius_m * 1000.0, 2.0, 50.0) / 1000.0;
-    if (auto rings = ft->find("ring_polar_deg")) {
-      const std::vector<double> v = rings->as_doubles();
-      if (v.size() != 4 || v[0] != 0.0) rings->fail("must be 4 angles starting with 0");
-      for (std::size_t i = 1; i < 4; ++i) {
-        if (!(v[i] > v[i - 1]) || v[i] >= 80.0) rings->fail("must increase and stay below 80");
-      }
-      for (std::size_t i = 0; i < 4; ++i)
-        fp.ring_polar_deg[i] = v[i];
+void parse_fingertip(const Node& ft, FingertipParams& fp) {
+  refuse_unknown(ft, {"dome_radius_mm", "ring_polar_deg", "normal_stiffness_n_per_mm",
+                      "normal_damping_nspm", "tangential_damping_nspm"});
+  fp.dome_radius_m = want(ft, "dome_radius_mm", fp.dome_radius_m * 1000.0, 2.0, 50.0) / 1000.0;
+  if (auto rings = ft.find("ring_polar_deg")) {
+    const std::vector<double> v = rings->as_doubles();
+    if (v.size() != 4 || v[0] != 0.0) rings->fail("must be 4 angles starting with 0");
+    for (std::size_t i = 1; i < 4; ++i) {
+      if (!(v[i] > v[i - 1]) || v[i] >= 80.0) rings->fail("must increase and stay below 80");
     }
-    fp.normal_stiffness_npm =
-        want(*ft, "normal_stiffness_n_per_mm", fp.normal_stiffness_npm / 1000.0, 0.05, 100.0) *
-        1000.0;
-    fp.normal_damping_nspm = want(*ft, "normal_damping_nspm", fp.normal_damping_nspm, 0.0, 10.0);
-    fp.tangential_damping_nspm =
-        want(*ft, "tangential_damping_nspm", fp.tangential_damping_nspm, 0.0, 10.0);
+    for (std::size_t i = 0; i < 4; ++i)
+      fp.ring_polar_deg[i] = v[i];
   }
+  fp.normal_stiffness_npm =
+      want(ft, "normal_stiffness_n_per_mm", fp.normal_stiffness_npm / 1000.0, 0.05, 100.0) * 1000.0;
+  fp.normal_damping_nspm = want(ft, "normal_damping_nspm", fp.normal_damping_nspm, 0.0, 10.0);
+  fp.tangential_damping_nspm =
+      want(ft, "tangential_damping_nspm", fp.tangential_damping_nspm, 0.0, 10.0);
+}
 
-  // sensor optics (optional)
-  if (auto so = root.find("sensor")) {
-    refuse_unknown(*so, {"mm_per_px", "disk_radius_px", "spot_peak_ref", "spot_sigma_min_px",
-                         "spot_sigma_max_px", "contact_on", "contact_off"});
-    SensorOpticsParams& o = s.optics;
-    o.mm_per_px = want(*so, "mm_per_px", o.mm_per_px, 0.001, 1.0);
-    o.disk_radius_px = want(*so, "disk_radius_px", o.disk_radius_px, 4.0, 20.0);
-    o.spot_peak_ref = want(*so, "spot_peak_ref", o.spot_peak_ref, 5.0, 250.0);
-    o.spot_sigma_min_px = want(*so, "spot_sigma_min_px", o.spot_sigma_min_px, 0.5, 10.0);
-    o.spot_sigma_max_px = want(*so, "spot_sigma_max_px", o.spot_sigma_max_px, 0.5, 10.0);
-    if (o.spot_sigma_max_px < o.spot_sigma_min_px)
-      (*so)["spot_sigma_max_px"].fail("must be at least spot_sigma_min_px");
-    o.contact_on = want(*so, "contact_on", o.contact_on, 1.0, 1e5);
-    o.contact_off = want(*so, "contact_off", o.contact_off, 0.0, o.contact_on);
-  }
+void parse_optics(const Node& so, SensorOpticsParams& o) {
+  refuse_unknown(so, {"mm_per_px", "disk_radius_px", "spot_peak_ref", "spot_sigma_min_px",
+                      "spot_sigma_max_px", "contact_on", "contact_off"});
+  o.mm_per_px = want(so, "mm_per_px", o.mm_per_px, 0.001, 1.0);
+  o.disk_radius_px = want(so, "disk_radius_px", o.disk_radius_px, 4.0, 20.0);
+  o.spot_peak_ref = want(so, "spot_peak_ref", o.spot_peak_ref, 5.0, 250.0);
+  o.spot_sigma_min_px = want(so, "spot_sigma_min_px", o.spot_sigma_min_px, 0.5, 10.0);
+  o.spot_sigma_max_px = want(so, "spot_sigma_max_px", o.spot_sigma_max_px, 0.5, 10.0);
+  if (o.spot_sigma_max_px < o.spot_sigma_min_px)
+    so["spot_sigma_max_px"].fail("must be at least spot_sigma_min_px");
+  o.contact_on = want(so, "contact_on", o.contact_on, 1.0, 1e5);
+  o.contact_off = want(so, "contact_off", o.contact_off, 0.0, o.contact_on);
+}
 
-  // simulation (optional)
-  if (auto sim = root.find("sim")) {
-    refuse_unknown(*sim, {"dt_s", "max_time_s", "settle_after_done_s", "partial_slip_ratio"});
-    s.dt_s = want(*sim, "dt_s", s.dt_s, 1e-6, 1e-3);
-    s.max_time_s = want(*sim, "max_time_s", s.max_time_s, 0.1, 3600.0);
-    s.settle_after_done_s = want(*sim, "settle_after_done_s", s.settle_after_done_s, 0.0, 10.0);
-    s.partial_slip_ratio = want(*sim, "partial_slip_ratio", s.partial_slip_ratio, 0.05, 1.0);
+void parse_sim(const Node& sim, Scenario& s) {
+  refuse_unknown(sim, {"dt_s", "max_time_s", "settle_after_done_s", "partial_slip_ratio"});
+  s.dt_s = want(sim, "dt_s", s.dt_s, 1e-6, 1e-3);
+  s.max_time_s = want(sim, "max_time_s", s.max_time_s, 0.1, 3600.0);
+  s.settle_after_done_s = want(sim, "settle_after_done_s", s.settle_after_done_s, 0.0, 10.0);
+  s.partial_slip_ratio = want(sim, "partial_slip_ratio", s.partial_slip_ratio, 0.05, 1.0);
+}
+
+// Overrides of the controller's settings, by the names of controller_keys().
+void parse_controller(const Node& ctl, std::vector<std::pair<std::string, double>>& out) {
+  if (!ctl.is_map()) ctl.fail("must be a mapping of controller settings");
+  for (const std::string& path : ctl.unknown_keys({})) {
+    const std::string key = path.substr(path.rfind('.') + 1);
+    bool known = false;
+    for (const std::string& k : controller_keys())
+      known = known || k == key;
+    const Node n = ctl[key];
+    if (!known) n.fail("unknown controller setting (see docs/rig.md)");
+    out.emplace_back(key, checked(n, -1e6, 1e6));
   }
-  if (1.0 / (c.fps * s.dt_s) < 1.0) {
+}
+
+}  // namespace
+
+Scenario parse_scenario(const std::string& text, const std::string& source) {
+  const Node root = config::parse_yaml(text, source);
+  if (!root.is_map()) root.fail("a scenario must be a mapping");
+  refuse_unknown(root, {"format", "seed", "camera", "cap", "bottle", "arm", "fingertip", "sensor",
+                        "sim", "controller"});
+  Scenario s;
+  s.source = source;
+  const Node format = root["format"];
+  if (format.as_string() != kScenarioFormat) {
+    format.fail(std::string("must be '") + kScenarioFormat + "', is " + format.text());
+  }
+  const Node seed = root["seed"];
+  const std::int64_t seed_value = seed.as_int();
+  if (seed_value < 0) seed.fail("must be a non-negative whole number, is " + seed.text());
+  s.seed = static_cast<std::uint64_t>(seed_value);
+
+  parse_camera(root["camera"], s.camera);
+  parse_cap(root["cap"], s.world.cap);
+  parse_bottle(root["bottle"], s.world.bottle);
+  parse_arm(root["arm"], s.world.arm);
+  if (auto ft = root.find("fingertip")) parse_fingertip(*ft, s.world.fingertip);
+  if (auto so = root.find("sensor")) parse_optics(*so, s.optics);
+  if (auto sim = root.find("sim")) parse_sim(*sim, s);
+  if (1.0 / (s.camera.fps * s.dt_s) < 1.0) {
     root["sim"]["dt_s"].fail("must not exceed the camera's frame period");
   }
-
-  // controller overrides (optional)
-  if (auto ctl = root.find("controller")) {
-    if (!ctl->is_map()) ctl->fail("must be a mapping of controller settings");
-    for (const std::string& path : ctl->unknown_keys({})) {
-      const std::string key = path.substr(path.rfind('.') + 1);
-      bool known = false;
-      for (const std::string& k : controller_keys())
-        known = known || k == key;
-      const Node n = (*ctl)[key];
-      if (!known) n.fail("unknown controller setting (see docs/rig.md)");
-      s.controller.emplace_back(key, checked(n, -1e6, 1e6));
-    }
-  }
+  if (auto ctl = root.find("controller")) parse_controller(*ctl, s.controller);
 
   // The fingertip's tangential law is the sensor's calibrated shear curve (see docs/rig.md).
   s.world.fingertip.shear_curve = PiecewiseLinear({0.0, 0.02, 0.08}, {0.0, 0.05, 0.4});

@@ -8,6 +8,7 @@
 
 #include "tactile/calibration.hpp"
 #include "tactile/detail/span.hpp"
+#include "tactile/geometry.hpp"
 #include "tactile/image.hpp"
 #include "tactile/reading.hpp"
 
@@ -16,6 +17,7 @@ namespace tactile {
 namespace detail {
 struct KernelSet;
 struct BlockData;
+struct Moments;
 }  // namespace detail
 
 // How the centroid (x_G, y_G) of a spot is estimated. All use the same increments
@@ -141,16 +143,41 @@ class Extractor {
     double y_px = 0;
   };
 
+  // The arrays detail::BlockData points into, one value per block pixel, built from the
+  // reference by build_block_tables(): the G threshold and the reference (kPlain's centroid
+  // threshold, kGaussian's baseline) in Q8, and the narrow forms of both that the kernels read
+  // (src/kernels.hpp). Parallel arrays, not one struct per pixel: the kernels load each of them
+  // a vector at a time.
+  struct BlockTables {
+    std::vector<std::int32_t> thr;
+    std::vector<std::int32_t> ref;
+    std::vector<std::uint16_t> thr16;
+    std::vector<std::uint16_t> ref16;
+    std::vector<std::uint8_t> thr_hi8;
+    std::vector<std::uint8_t> thr_lo;
+    std::vector<std::uint16_t> thr_hi16;
+    std::vector<std::uint8_t> ref_hi8;
+    std::vector<std::uint8_t> ref_lo;
+  };
+
   bool geometry_matches(const ImageView& f) const;
   template <typename Pixel>
-  bool windowed_pass(const ElementLayout& el, const ImageView& f, double& x, double& y,
+  bool windowed_pass(std::size_t element, const ImageView& f, double& x, double& y,
                      double half_width) const noexcept;
   template <typename Pixel>
   bool gaussian_pass(std::size_t element, const ImageView& f, double& x, double& y,
                      double& sigma) noexcept;
   template <typename Pixel>
+  void gaussian_refine(std::size_t element, const ImageView& f, const detail::Moments& m, double g,
+                       Vec2& p) noexcept;
+  template <typename Pixel>
+  Vec2 centroid(std::size_t element, const ImageView& f, const detail::Moments& m,
+                double g) noexcept;
+  void record_contact(std::size_t element, Vec2 p, double g, std::uint32_t gap) noexcept;
+  template <typename Pixel>
   void measure_all(const ImageView& f, std::uint32_t gap) noexcept;
-  void build_thresholds();
+  void build_block_tables();
+  void set_block_pixel(std::size_t at, std::int32_t ref_q);
   detail::BlockData block_data() const noexcept;
   ReferenceResult complete_reference();
   ReferenceResult refuse(ReferenceStatus s, std::uint32_t id, double value);
@@ -160,24 +187,12 @@ class Extractor {
   std::int32_t floor_q_ = 0;
   std::vector<Span> spans_;
   std::vector<ElementLayout> layout_;
-  std::vector<std::int32_t> ref_q_;  // reference mean in Q8 (x256), disk pixels only
-  std::vector<std::int32_t> thr_q_;  // ref_q_ + floor: the G threshold, disk pixels only
-  // Each element's disk padded to a block (detail::Block), and per block pixel, from the
-  // reference: the G threshold in Q8; the reference itself (the kPlain centroid threshold and
-  // the kGaussian baseline), with a value no pixel reaches outside the disk; and the G
-  // threshold split into whole gray levels (clamped to the pixel range) and the fraction, for
-  // the narrow-integer exact G of elements out of contact (src/kernels.hpp).
+  // The reference mean in Q8 (x256), disk pixels only.
+  std::vector<std::int32_t> ref_q_;
+  // Each element's disk padded to a block (detail::Block), and the tables over the blocks.
   std::vector<detail::Block> blocks_;
-  std::vector<std::int32_t> blk_thr_;
-  std::vector<std::int32_t> blk_ref_;
-  std::vector<std::uint16_t> blk_thr16_;   // 8-bit sensors: blk_thr_ clamped to 65535
-  std::vector<std::uint16_t> blk_ref16_;   // 8-bit sensors: blk_ref_ clamped to 65535
-  std::vector<std::uint8_t> blk_ref_hi8_;  // 8-bit sensors: blk_ref_ split like the threshold
-  std::vector<std::uint8_t> blk_ref_lo_;
+  BlockTables tables_;
   const detail::KernelSet* kernels_ = nullptr;
-  std::vector<std::uint8_t> blk_hi8_;
-  std::vector<std::uint16_t> blk_hi16_;
-  std::vector<std::uint8_t> blk_lo_;
   bool has_reference_ = false;
   Region disks_;  // the smallest region holding every disk pixel
 

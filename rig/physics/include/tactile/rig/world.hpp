@@ -204,6 +204,17 @@ class World {
   void contact_forces(Vec3& force, double& torque, double dt) noexcept;
   void update_cap_place() noexcept;
   void update_tangential(double dt) noexcept;
+  // What the table and the bottle neck add to the cap this step.
+  struct Supports {
+    double table_n = 0;  // normal force of the table (for its friction)
+    double friction_torque_max = 0;
+    double thread_torque = 0;
+  };
+  Supports support_forces(Vec3& force, double inertia) const noexcept;
+  void integrate_cap(Vec3 force, double torque, const Supports& s, double inertia,
+                     double dt) noexcept;
+  bool state_finite() const noexcept;
+  void roll_back(const ArmState& arm, const CapState& cap, double dt) noexcept;
   double shear_force(double s_mm) const noexcept { return p_.fingertip.shear_curve.odd(s_mm); }
   void release_to(Element& e, double force_n) const noexcept;
 
