@@ -66,9 +66,10 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
   cfg.arm_timeout_s = positive("arm_timeout_s", cfg.arm_timeout_s);
   cfg.pair_window_s = root.get("pair_window_s", cfg.pair_window_s);
   if (!(cfg.pair_window_s >= 0 && cfg.pair_window_s <= 1)) {
-    root["pair_window_s"].fail("must be 0 (off) or a number of seconds up to 1 (keep it below half "
-                               "the frame period), is " +
-                               root["pair_window_s"].text());
+    root["pair_window_s"].fail(
+        "must be 0 (off) or a number of seconds up to 1 (keep it below half "
+        "the frame period), is " +
+        root["pair_window_s"].text());
   }
   if (auto n = root.find("start_after_frames")) {
     const std::int64_t v = n->as_int();

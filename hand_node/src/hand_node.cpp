@@ -137,10 +137,9 @@ void HandNode::on_topic_message() {
   // left sensor_node shortly before this one: after hand_node was not scheduled for a while, its
   // next frame is queued behind this one, and not waiting would hold the arm for stale data that
   // is not stale.
-  const bool other_live =
-      have_frame_[other] &&
-      (now - last_whole_ns_[other] <= stale_ns_ ||
-       frames_[other].header.receive_timestamp_ns >= frame.header.receive_timestamp_ns - stale_ns_);
+  const bool other_live = have_frame_[other] && (now - last_whole_ns_[other] <= stale_ns_ ||
+                                                 frames_[other].header.receive_timestamp_ns >=
+                                                     frame.header.receive_timestamp_ns - stale_ns_);
   if (pairing_.arrived(k, frame.header.receive_timestamp_ns, now, other_live))
     step(now, pairing_.take());
 }
@@ -268,10 +267,9 @@ Outcome HandNode::run() {
     // Woken more than a control period later than asked: this process did not run (not
     // scheduled, stopped). Frames sent meanwhile may still be on their way through ZeroMQ's I/O
     // thread: the time-driven step (which judges staleness) waits for one more short poll.
-    const bool overslept =
-        util::monotonic_ns() - poll_start -
-            std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count() >
-        period_ns;
+    const bool overslept = util::monotonic_ns() - poll_start -
+                               std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count() >
+                           period_ns;
     while (sub_.receive(msg_, std::chrono::milliseconds(0)))
       on_topic_message();
     while (arm_.receive(arm_buf_, std::chrono::milliseconds(0)))
@@ -283,8 +281,7 @@ Outcome HandNode::run() {
       step(now, pairing_.take());
     }
     // Time-driven steps (timeouts, settling, staleness) run even when no frame arrives.
-    if (!overslept && !pairing_.any_waiting() && now - last_update_ns_ >= period_ns)
-      step(now, {});
+    if (!overslept && !pairing_.any_waiting() && now - last_update_ns_ >= period_ns) step(now, {});
     if (now - last_sent_ns_ >= heartbeat_ns) send_heartbeat(now);
     if (have_arm_ && !arm_silent_reported_ && now - last_arm_ns_ > arm_timeout_ns) {
       util::log_warn("no word from the arm controller for {:.1f} s",

@@ -27,7 +27,8 @@ struct HandCounters {
   std::uint64_t arm_states = 0;
   std::uint64_t events = 0;
   std::uint64_t stale_holds = 0;
-  std::uint64_t unpaired = 0;  // frames whose other fingertip's frame did not come within pair_window_s
+  std::uint64_t unpaired =
+      0;  // frames whose other fingertip's frame did not come within pair_window_s
 };
 
 enum class Outcome { kDone, kAborted, kStopped };

@@ -51,8 +51,8 @@ constexpr std::int64_t kFakeCameraSpinUs = 100;
 // set to 1 ns), and spins only through those. A poll of 0 just after a boundary (the frame is
 // due) returns at once, as before. Periods under 2 ms keep the spin: there the two cases cannot
 // be told apart by the time alone.
-static_assert(sizeof(GPollFD) == sizeof(pollfd) && offsetof(GPollFD, revents) ==
-                                                       offsetof(pollfd, revents),
+static_assert(sizeof(GPollFD) == sizeof(pollfd) &&
+                  offsetof(GPollFD, revents) == offsetof(pollfd, revents),
               "g_poll passes GPollFD to poll(2) as GLib does on Linux");
 extern "C" gint g_poll(GPollFD* fds, guint nfds, gint timeout) {
   const std::int64_t period_us = tactile::camera::t_fake_camera_period_us;
@@ -159,10 +159,9 @@ struct FakeGvCamera::Impl {
     // This thread streams at the camera's period (see g_poll above). The register, not the
     // options: a client may change the frame rate.
     guint32 period_us = 0;
-    if (self->camera &&
-        arv_fake_camera_read_register(arv_gv_fake_camera_get_fake_camera(self->camera.get()),
-                                      ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
-                                      &period_us)) {
+    if (self->camera && arv_fake_camera_read_register(
+                            arv_gv_fake_camera_get_fake_camera(self->camera.get()),
+                            ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US, &period_us)) {
       if (t_fake_camera_period_us == 0) prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
       t_fake_camera_period_us = period_us;
     }

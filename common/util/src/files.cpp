@@ -78,8 +78,9 @@ ReadyFile::ReadyFile(std::filesystem::path path) : path_(std::move(path)) {
   if (path_.empty()) return;
   std::error_code ec;
   std::filesystem::remove(path_, ec);
-  if (ec) throw std::runtime_error(path_.string() + ": cannot remove a stale ready file: " +
-                                   ec.message());
+  if (ec)
+    throw std::runtime_error(path_.string() +
+                             ": cannot remove a stale ready file: " + ec.message());
   check_writable_dir(path_.parent_path());
 }
 

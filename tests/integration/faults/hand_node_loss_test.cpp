@@ -129,8 +129,8 @@ TEST(HandNodeUnderLoss, SkipsAndCountsEveryIncompleteFrame) {
         << "no frames from the sensor_nodes" << logs();
   }
   hand_process.emplace(std::vector<std::string>{
-      TACTILE_HAND_NODE_PATH, "--config", (dir / "hand.yaml").string(), "--subscribe",
-      endpoints[0], "--subscribe", endpoints[1], "--arm", arm.endpoint()});
+      TACTILE_HAND_NODE_PATH, "--config", (dir / "hand.yaml").string(), "--subscribe", endpoints[0],
+      "--subscribe", endpoints[1], "--arm", arm.endpoint()});
   ChildProcess& hand = *hand_process;
   // Runs the arm controller and the collector until `done` or the deadline.
   const auto run_until = [&](const std::function<bool()>& done, std::chrono::seconds limit) {

@@ -342,7 +342,8 @@ class HandNodeRun {
         h.camera_frame_id = h.sequence + 1;
         h.camera_timestamp_ns = 1'000'000'000 + static_cast<std::int64_t>(frame) * 10'000'000;
         // sensor_node's receive time: the second camera's frame a little after the first's.
-        h.receive_timestamp_ns = h.camera_timestamp_ns + 300'000 + static_cast<std::int64_t>(t) * 100'000;
+        h.receive_timestamp_ns =
+            h.camera_timestamp_ns + 300'000 + static_cast<std::int64_t>(t) * 100'000;
         h.status = v1::FRAME_STATUS_COMPLETE;
         h.nominal_period_ns = 10'000'000;
         wire::fill_tactile_frame(kIds[t], h, readings[t], cals_[t].mm_per_px,
@@ -552,8 +553,7 @@ TEST(HandNode, HeartbeatsKeepTheirPeriodWhenNothingWakesIt) {
   ASSERT_FALSE(r.process.timed_out);
   EXPECT_EQ(r.process.exit_code, 0) << r.process.err;
   EXPECT_GT(r.heartbeats, 30U) << r.process.err;
-  const double max_silence_ms =
-      std::chrono::duration<double, std::milli>(r.max_silence).count();
+  const double max_silence_ms = std::chrono::duration<double, std::milli>(r.max_silence).count();
   EXPECT_LT(max_silence_ms, 40.0) << "heartbeat period 10 ms";
   std::fprintf(stderr, "[measured] longest silence on the arm link %.1f ms (heartbeat 10 ms)\n",
                max_silence_ms);

@@ -20,7 +20,9 @@
 
 #if TACTILE_SANITIZED
 // Read by AddressSanitizer at start-up; ASAN_OPTIONS in the environment still overrides it.
-extern "C" const char* __asan_default_options() { return "quarantine_size_mb=1"; }
+extern "C" const char* __asan_default_options() {
+  return "quarantine_size_mb=1";
+}
 #endif
 
 namespace tactile::rig {

@@ -2,10 +2,10 @@
 // namespace of its own, joined by veth pairs to three bridges (control, camera_left,
 // camera_right) with the addresses of docker/compose.yaml, running docker/config's files. This is
 // the two-machine lab in miniature: nothing talks over loopback.
-#include <cstdio>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>

@@ -30,7 +30,9 @@ using testing::TempDir;
 const std::string kScenario = TACTILE_SYSTEM_SCENARIO;
 
 // The scenario's frame period (ms): hand_node's staleness limit is three of them.
-double frame_period_ms() { return 1000.0 / rig::load_scenario(kScenario).camera.fps; }
+double frame_period_ms() {
+  return 1000.0 / rig::load_scenario(kScenario).camera.fps;
+}
 
 std::string slurp(const std::filesystem::path& p) {
   std::ifstream in(p);

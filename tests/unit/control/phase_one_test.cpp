@@ -333,22 +333,11 @@ TEST(PhaseOne, SlipsWhileTheDeadmanHoldsTheLiftAndRightAfterAreNotClassified) {
     bottle_on_lowering(r);
   });
   const testing::Trace t = testing::run(ctl, rig);
-  const std::vector<std::string> expected{"PHASE APPROACH",
-                                          "PHASE DESCEND",
-                                          "PHASE GRASP",
-                                          "TOUCH",
-                                          "GRASPING_ENDED",
-                                          "PHASE LIFT",
-                                          "RECOMPRESS tip0",
-                                          "RECOMPRESS tip1",
-                                          "GRASP_CLASSIFIED tip0",
-                                          "RECOMPRESS tip0",
-                                          "PHASE TRANSPORT",
-                                          "PHASE LOWER",
-                                          "RELEASE_CLASSIFIED tip0",
-                                          "PHASE RELEASE",
-                                          "PHASE RETRACT",
-                                          "DONE"};
+  const std::vector<std::string> expected{
+      "PHASE APPROACH",          "PHASE DESCEND",   "PHASE GRASP",     "TOUCH",
+      "GRASPING_ENDED",          "PHASE LIFT",      "RECOMPRESS tip0", "RECOMPRESS tip1",
+      "GRASP_CLASSIFIED tip0",   "RECOMPRESS tip0", "PHASE TRANSPORT", "PHASE LOWER",
+      "RELEASE_CLASSIFIED tip0", "PHASE RELEASE",   "PHASE RETRACT",   "DONE"};
   EXPECT_EQ(describe(t.events), expected);
   EXPECT_EQ(ctl.phase(), Phase::kDone);
 }

@@ -37,7 +37,11 @@ TEST_F(WritableDir, RefusesAFolderItCannotWriteNamingIt) {
   if (::geteuid() == 0) {
     // Root writes through permission bits: a path under a regular file is refused instead.
     const fs::path file = dir_ / "plain";
-    { std::FILE* f = std::fopen(file.c_str(), "w"); ASSERT_NE(f, nullptr); std::fclose(f); }
+    {
+      std::FILE* f = std::fopen(file.c_str(), "w");
+      ASSERT_NE(f, nullptr);
+      std::fclose(f);
+    }
     try {
       check_writable_dir(file / "out");
       FAIL() << "a folder under a regular file was accepted";

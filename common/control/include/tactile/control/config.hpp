@@ -46,8 +46,8 @@ struct Config {
   // just under F2, and the next slip pushes it over again within a frame (a chatter at F2 seen in
   // real-time runs with a light F1). 1 is the paper's rule: OVER alone stops the squeeze.
   double recompress_max_f2_fraction = 0.9;
-  double backoff_speed_mps = 0.001;     // OVER: speed away from the object along -z_f
-  double max_finger_speed_mps = 0.01;   // bound on every fingertip velocity's magnitude
+  double backoff_speed_mps = 0.001;    // OVER: speed away from the object along -z_f
+  double max_finger_speed_mps = 0.01;  // bound on every fingertip velocity's magnitude
 
   // --- places (world frame, m) -------------------------------------------------------------
   double cap_x_m = 0.35;
