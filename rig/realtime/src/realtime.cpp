@@ -17,6 +17,7 @@
 #include "tactile/rig/arm_link.hpp"
 #include "tactile/rig/optics.hpp"
 #include "tactile/rig/scoring.hpp"
+#include "tactile/rig/sensors.hpp"
 #include "tactile/rig/truth.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/fd.hpp"
@@ -99,7 +100,7 @@ class WakeTimer {
 struct KeptTruth {
   std::uint64_t frame = 0;
   double t = 0;
-  double threshold_mm = 0;
+  control::Phase phase = control::Phase::kIdle;  // the controller's, when it was taken
   GroundTruth truth;
   std::array<bool, kFingertips> scored{};
 };
@@ -118,21 +119,17 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
 
   // Sensors: calibrations (written for sensor_node and hand_node), renderers, cameras.
   const auto normals = world.element_normals();
-  const std::array<const char*, kFingertips> ids{"left", "right"};
-  std::vector<Renderer> renderers;
-  std::array<util::Random, kFingertips> frame_rng{util::Random(sc.seed * 4 + 1),
-                                                  util::Random(sc.seed * 4 + 2)};
-  std::array<Image, kFingertips> images;
+  const auto& ids = kFingertipIds;
   std::vector<std::unique_ptr<camera::FakeGvCamera>> cameras;
   CameraParams cam = sc.camera;
   cam.refresh_outside_disks = opt.full_noise;
+  SimulatedSensors sensors(sc, cam, normals);
+  run.calibrations = sensors.calibrations();
   for (std::size_t i = 0; i < kFingertips; ++i) {
-    run.calibrations[i] = make_calibration(ids[i], cam, sc.optics, normals);
     if (!opt.calibration_dir.empty()) {
       config::save_calibration(opt.calibration_dir / (std::string(ids[i]) + ".yaml"),
                                run.calibrations[i]);
     }
-    renderers.emplace_back(run.calibrations[i], cam, sc.optics, sc.seed * 4 + 3 + i * 7919);
     camera::FakeGvCameraOptions fo;
     fo.address = opt.camera_addresses[i];
     fo.serial = opt.camera_serials[i];
@@ -143,9 +140,8 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
     cameras.push_back(std::make_unique<camera::FakeGvCamera>(fo));
     util::log_info("camera {} ({}) serving on {}", ids[i], fo.serial, fo.address);
   }
-  const Calibration& cal0 = run.calibrations[0];
-  TruthRecorder recorder(cal0.normal_curve(cal0.contact_on), sc.partial_slip_ratio);
   RunScorer scorer(run, cfg, opt.record_series);
+  const Vec3 transport = transport_direction(sc.world);
 
   // Sockets.
   zmq::context_t ctx;
@@ -177,7 +173,6 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
   std::array<wire::ReceivedFrame, kFingertips> measured;
   for (std::size_t i = 0; i < kFingertips; ++i)
     measured[i].elements.resize(kElementsPerFingertip);
-  std::array<ElementLoad, kElementsPerFingertip> loads{};
   std::deque<KeptTruth> kept;
   std::vector<double> latencies_ms;
   latencies_ms.reserve(1 << 16);
@@ -306,8 +301,8 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
     }
     it->scored[tip] = true;
     ++c.frames_scored;
-    scorer.add_measurement(tip, it->frame - first_frame, it->t, measured[tip].elements,
-                           it->truth.fingertips[tip], it->threshold_mm, world);
+    scorer.add_measurement(tip, it->frame - first_frame, measured[tip].elements,
+                           it->truth.fingertips[tip], it->phase);
   };
 
   const auto on_event = [&]() {
@@ -320,8 +315,16 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
     if (p) phase = *p;
     twist_cycle = std::max(twist_cycle, e.cycle());
     const double t = static_cast<double>(util::realtime_ns() - start_ns) * 1e-9;
-    scorer.add_event(static_cast<control::EventKind>(e.kind()), p.value_or(phase), e.cycle(),
-                     e.text(), e.value(), t);
+    control::Event ce;
+    ce.kind = static_cast<control::EventKind>(e.kind());
+    ce.phase = p.value_or(phase);
+    ce.cycle = e.cycle();
+    for (std::size_t i = 0; i < kFingertips; ++i) {
+      if (e.sensor_id() == ids[i]) ce.fingertip = static_cast<std::int8_t>(i);
+    }
+    ce.value = e.value();
+    ce.text = e.text().c_str();  // copied by the scorer
+    scorer.add_event(ce, t);
     if (e.kind() == v1::EVENT_KIND_DONE || e.kind() == v1::EVENT_KIND_ABORTED) {
       if (!ended) {
         ended = true;
@@ -371,23 +374,17 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
     const std::int64_t started_ns = now;
     advance_to(send_ns);
     const std::int64_t stepped_ns = util::realtime_ns();
-    const double thr = cfg.dr_mm * (control::is_twist_phase(phase) ? cfg.twist_dr_factor : 1.0);
-    const GroundTruth& gt = recorder.take(world, frame, thr);
+    const GroundTruth& gt = sensors.truth().take(world, frame, slip_threshold_mm(cfg, phase));
     KeptTruth kt;
     kt.frame = frame;
     kt.t = world.time();
-    kt.threshold_mm = thr;
+    kt.phase = phase;
     kt.truth = gt;
     kt.truth.twist_cycle = twist_cycle;
     for (auto& ft : kt.truth.fingertips)
       ft.camera_timestamp_ns = send_ns;
     for (std::size_t i = 0; i < kFingertips; ++i) {
-      for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
-        const ElementTruth& et = gt.fingertips[i].elements[k];
-        loads[k] = {et.fz_n, et.ux_mm, et.uy_mm};
-      }
-      renderers[i].render(loads, frame_rng[i], images[i]);
-      if (!cameras[i]->publish(images[i].view(), frame, send_ns)) {
+      if (!cameras[i]->publish(sensors.render(i, gt.fingertips[i]).view(), frame, send_ns)) {
         util::log_warn("camera {}: a receiver set another format; frame not published", ids[i]);
       }
     }
@@ -402,7 +399,8 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
           static_cast<double>(stepped_ns - started_ns) * 1e-6,
           static_cast<double>(published_ns - stepped_ns) * 1e-6);
     }
-    scorer.add_truth(kt.truth, twist_cycle);
+    scorer.add_truth(frame - first_frame, kt.t, kt.truth, {phase, twist_cycle},
+                     frame_pose(world, transport));
     if (truth_pub) {
       fill_truth_message(kt.truth, util::realtime_ns(), *truth_env.mutable_ground_truth());
       wire::encode(truth_env, out);
@@ -440,7 +438,7 @@ RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
     ++frame;
   }
   if (util::stop_requested() && !ended) rep.end_reason = "stopped";
-  scorer.finish(world, static_cast<double>(util::realtime_ns() - start_ns) * 1e-9,
+  scorer.finish(world.cap().dropped, static_cast<double>(util::realtime_ns() - start_ns) * 1e-9,
                 frame - first_frame);
   if (ended && rep.completed) rep.end_reason = "done";
   if (!latencies_ms.empty()) {
@@ -481,7 +479,7 @@ void write_node_configs(const Scenario& sc, const std::filesystem::path& dir,
   World world(sc.world);
   const auto normals = world.element_normals();
   CameraParams cam = sc.camera;
-  const std::array<const char*, kFingertips> ids{"left", "right"};
+  const auto& ids = kFingertipIds;
   for (std::size_t i = 0; i < kFingertips; ++i) {
     config::save_calibration(dir / (std::string(ids[i]) + ".yaml"),
                              make_calibration(ids[i], cam, sc.optics, normals));
@@ -519,8 +517,7 @@ void write_node_configs(const Scenario& sc, const std::filesystem::path& dir,
       "# Between frames the controller runs only when a frame is half a period late: its timed\n"
       "# transitions run on frames and answer fresh ones.\n"
       "control_period_s: {}\n",
-      sc.source, opt.deadman_s * 1e3, opt.deadman_s / 4, 0.4 / sc.camera.fps,
-      1.5 / sc.camera.fps);
+      sc.source, opt.deadman_s * 1e3, opt.deadman_s / 4, 0.4 / sc.camera.fps, 1.5 / sc.camera.fps);
   hand += hand_controller_yaml(sc);
   util::write_file_atomic(dir / "hand_node.yaml", hand);
 }
