@@ -1,5 +1,7 @@
 #include "tactile/rig/sensors.hpp"
 
+#include "tactile/config/calibration_file.hpp"
+
 namespace tactile::rig {
 namespace {
 
@@ -11,24 +13,34 @@ std::uint64_t mix(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
-std::array<Calibration, kFingertips> make_calibrations(const Scenario& sc,
-                                                       const CameraParams& camera,
-                                                       std::span<const Vec3> normals) {
-  std::array<Calibration, kFingertips> cals;
-  for (std::size_t i = 0; i < kFingertips; ++i)
-    cals[i] = make_calibration(kFingertipIds[i], camera, sc.optics, normals);
-  return cals;
-}
-
 double visible_fz_n(const Calibration& cal) {
   return cal.normal_curve(cal.contact_on);
 }
 
 }  // namespace
 
+std::array<Calibration, kFingertips> simulated_calibrations(const Scenario& sc,
+                                                            const CameraParams& camera,
+                                                            std::span<const Vec3> normals) {
+  std::array<Calibration, kFingertips> cals;
+  for (std::size_t i = 0; i < kFingertips; ++i)
+    cals[i] = make_calibration(kFingertipIds[i], camera, sc.optics, normals);
+  return cals;
+}
+
+std::vector<std::filesystem::path> save_calibrations(
+    const std::filesystem::path& dir, const std::array<Calibration, kFingertips>& calibrations) {
+  std::vector<std::filesystem::path> paths;
+  for (const Calibration& cal : calibrations) {
+    paths.push_back(dir / (cal.sensor_id + ".yaml"));
+    config::save_calibration(paths.back(), cal);
+  }
+  return paths;
+}
+
 SimulatedSensors::SimulatedSensors(const Scenario& sc, const CameraParams& camera,
                                    std::span<const Vec3> normals)
-    : calibrations_(make_calibrations(sc, camera, normals)),
+    : calibrations_(simulated_calibrations(sc, camera, normals)),
       frame_rng_{util::Random(mix(sc.seed * 4 + 1)), util::Random(mix(sc.seed * 4 + 2))},
       truth_(visible_fz_n(calibrations_[0]), sc.partial_slip_ratio) {
   for (std::size_t i = 0; i < kFingertips; ++i)

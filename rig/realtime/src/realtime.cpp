@@ -12,7 +12,6 @@
 #include <thread>
 
 #include "tactile/camera/fake_gv_camera.hpp"
-#include "tactile/config/calibration_file.hpp"
 #include "tactile/control/config.hpp"
 #include "tactile/rig/arm_link.hpp"
 #include "tactile/rig/optics.hpp"
@@ -209,11 +208,9 @@ RealtimeRun::RealtimeRun(const Scenario& sc, const RealtimeOptions& opt)
       arm_peer_(static_cast<std::int64_t>(opt.deadman_s * 1e9)) {
   // Sensors: calibrations (written for sensor_node and hand_node) and cameras.
   const auto& ids = kFingertipIds;
+  if (!opt.calibration_dir.empty())
+    save_calibrations(opt.calibration_dir, result_.run.calibrations);
   for (std::size_t i = 0; i < kFingertips; ++i) {
-    if (!opt.calibration_dir.empty()) {
-      config::save_calibration(opt.calibration_dir / (std::string(ids[i]) + ".yaml"),
-                               result_.run.calibrations[i]);
-    }
     camera::FakeGvCameraOptions fo;
     fo.address = opt.camera_addresses[i];
     fo.serial = opt.camera_serials[i];
@@ -531,14 +528,9 @@ std::string hand_controller_yaml(const Scenario& sc) {
 
 void write_node_configs(const Scenario& sc, const std::filesystem::path& dir,
                         const RealtimeOptions& opt) {
-  World world(sc.world);
-  const auto normals = world.element_normals();
-  CameraParams cam = sc.camera;
+  const World world(sc.world);
+  save_calibrations(dir, simulated_calibrations(sc, sc.camera, world.element_normals()));
   const auto& ids = kFingertipIds;
-  for (std::size_t i = 0; i < kFingertips; ++i) {
-    config::save_calibration(dir / (std::string(ids[i]) + ".yaml"),
-                             make_calibration(ids[i], cam, sc.optics, normals));
-  }
   std::string sensor = fmt::format(
       "# sensor_node for the rig's scenario {} (written by rig --write-configs)\n"
       "format: tactile-sensor/1\n"

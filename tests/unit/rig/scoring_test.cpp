@@ -101,7 +101,7 @@ LockstepResult empty_run() {
   LockstepResult run;
   const Scenario sc = load_scenario(kDir / "default.yaml");
   const World world(sc.world);
-  run.calibrations = SimulatedSensors(sc, sc.camera, world.element_normals()).calibrations();
+  run.calibrations = simulated_calibrations(sc, sc.camera, world.element_normals());
   return run;
 }
 

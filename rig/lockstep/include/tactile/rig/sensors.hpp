@@ -5,6 +5,7 @@
 // generators (seeds mixed from the scenario's seed), and the truth recorder at the sensors' own
 // contact threshold.
 #include <array>
+#include <filesystem>
 #include <span>
 #include <vector>
 
@@ -19,6 +20,15 @@ namespace tactile::rig {
 
 // The fingertips' sensor ids, in fingertip order.
 inline constexpr std::array<const char*, kFingertips> kFingertipIds{"left", "right"};
+
+// The two simulated sensors' calibrations for this scenario and camera.
+std::array<Calibration, kFingertips> simulated_calibrations(const Scenario& scenario,
+                                                            const CameraParams& camera,
+                                                            std::span<const Vec3> normals);
+// Writes each as `dir`/<sensor_id>.yaml (tactile-calibration/1), the files sensor_node and
+// hand_node load; returns the paths written. Throws when a file cannot be written.
+std::vector<std::filesystem::path> save_calibrations(
+    const std::filesystem::path& dir, const std::array<Calibration, kFingertips>& calibrations);
 
 class SimulatedSensors {
  public:
