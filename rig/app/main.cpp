@@ -9,11 +9,11 @@
 #include <filesystem>
 #include <string>
 
-#include "tactile/config/calibration_file.hpp"
 #include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/plots.hpp"
 #include "tactile/rig/realtime.hpp"
 #include "tactile/rig/scenario.hpp"
+#include "tactile/rig/sensors.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
@@ -209,10 +209,8 @@ int run(int argc, char** argv) {
                                  wall_s, cpu_s, sim_s, ratio, cpu_ratio));
   }
   if (!calibration_dir.empty()) {
-    for (const tactile::Calibration& cal : result.calibrations) {
-      const std::filesystem::path path =
-          std::filesystem::path(calibration_dir) / (cal.sensor_id + ".yaml");
-      tactile::config::save_calibration(path, cal);
+    for (const std::filesystem::path& path :
+         tactile::rig::save_calibrations(calibration_dir, result.calibrations)) {
       tactile::util::log_info("wrote {}", path.string());
     }
   }

@@ -12,19 +12,12 @@
 #include "tactile/control/controller.hpp"
 #include "tactile/extractor.hpp"
 #include "tactile/rig/control_link.hpp"
-#include "tactile/rig/optics.hpp"
+#include "tactile/rig/scoring.hpp"
+#include "tactile/rig/sensors.hpp"
 #include "tactile/rig/world.hpp"
 
 namespace tactile::rig {
 namespace {
-
-// splitmix64: independent seeds for the noise pools and frame offsets from the scenario seed.
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
 
 double ratio(std::uint64_t part, std::uint64_t rest) {
   return part + rest > 0 ? static_cast<double>(part) / static_cast<double>(part + rest) : 1.0;
@@ -107,33 +100,21 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   rep.physics_step_s = dt;
 
   const auto normals = world.element_normals();
-  const std::array<const char*, kFingertips> ids{"left", "right"};
-  std::vector<Renderer> renderers;
+  SimulatedSensors sensors(sc, sc.camera, normals);
+  result.calibrations = sensors.calibrations();
   std::vector<Extractor> extractors;
-  std::array<util::Random, kFingertips> frame_rng{util::Random(mix(sc.seed * 4 + 1)),
-                                                  util::Random(mix(sc.seed * 4 + 2))};
-  std::array<Image, kFingertips> images;
   for (std::size_t i = 0; i < kFingertips; ++i) {
-    result.calibrations[i] = make_calibration(ids[i], sc.camera, sc.optics, normals);
-    renderers.emplace_back(result.calibrations[i], sc.camera, sc.optics,
-                           mix(sc.seed * 4 + 3 + i * 7919));
     ExtractorOptions eo;
     eo.reference_frames = sc.optics.reference_frames;
     extractors.emplace_back(result.calibrations[i], eo);
   }
-  const Calibration& cal0 = result.calibrations[0];
-  rep.normal_full_scale_N = cal0.normal_curve.y().back();
-  TruthRecorder truth(cal0.normal_curve(cal0.contact_on), sc.partial_slip_ratio);
 
   // The no-load reference, captured before the task starts (nothing touches the sensors).
-  std::array<std::array<ElementLoad, kElementsPerFingertip>, kFingertips> loads{};
   for (std::size_t i = 0; i < kFingertips; ++i) {
     extractors[i].begin_reference();
     ReferenceResult r{};
-    for (int k = 0; k < sc.optics.reference_frames; ++k) {
-      renderers[i].render(loads[i], frame_rng[i], images[i]);
-      r = extractors[i].add_reference_frame(images[i].view());
-    }
+    for (int k = 0; k < sc.optics.reference_frames; ++k)
+      r = extractors[i].add_reference_frame(sensors.render(i, FingertipTruth{}).view());
     if (r.status != ReferenceStatus::kComplete) {
       throw std::runtime_error(std::string("lockstep: no-load reference refused: ") +
                                to_string(r.status));
@@ -145,17 +126,8 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   bool done_seen = false;
   double done_at = 0;
   double dropped_at = -1;
-  SlipScorer slip;
-  double sq_normal = 0;
-  double sq_shear = 0;
-  std::uint64_t n_normal = 0;
-  std::uint64_t n_shear = 0;
-  bool transport_snapshot = false;
-
-  // The paper's Fig. 10 plots against the fingertip's position along the transport: here the
-  // horizontal direction from the cap's place to the bottle.
-  Vec3 path_dir{sc.world.bottle.x_m - sc.world.cap.x_m, sc.world.bottle.y_m - sc.world.cap.y_m, 0};
-  path_dir = norm(path_dir) > 0 ? (1.0 / norm(path_dir)) * path_dir : Vec3{1, 0, 0};
+  RunScorer scorer(result, cfg, opt.record_series);
+  const Vec3 transport = transport_direction(sc.world);
 
   std::uint64_t frame = 0;
   const auto max_frames = static_cast<std::uint64_t>(std::ceil(sc.max_time_s * sc.camera.fps));
@@ -171,18 +143,12 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
     }
     ++frame;
     const double t = static_cast<double>(frame) / sc.camera.fps;
-    const double thr = cfg.dr_mm * (control::is_twist_phase(phase) ? cfg.twist_dr_factor : 1.0);
-    const GroundTruth& gt = truth.take(world, frame, thr);
+    const GroundTruth& gt = sensors.truth().take(world, frame, slip_threshold_mm(cfg, phase));
 
     // Render and measure both fingertips.
     std::array<control::FingertipInput, control::kFingertips> tips{};
     for (std::size_t i = 0; i < kFingertips; ++i) {
-      for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
-        const ElementTruth& et = gt.fingertips[i].elements[k];
-        loads[i][k] = {et.fz_n, et.ux_mm, et.uy_mm};
-      }
-      renderers[i].render(loads[i], frame_rng[i], images[i]);
-      extractors[i].measure(images[i].view(),
+      extractors[i].measure(sensors.render(i, gt.fingertips[i]).view(),
                             {frame, static_cast<std::int64_t>(std::llround(t * 1e9))});
       tips[i].elements = extractors[i].readings();
       tips[i].normals = normals;
@@ -203,152 +169,14 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
     in.now_s = t;
     const control::ControllerOutput out = controller.update(in);
 
-    // Score the measurement against the truth, element-frame by element-frame.
-    FrameSample sample;
-    sample.t = t;
-    for (std::size_t i = 0; i < kFingertips; ++i) {
-      const auto readings = extractors[i].readings();
-      double best = -1;
-      for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
-        const ElementReading& r = readings[k];
-        const ElementTruth& et = gt.fingertips[i].elements[k];
-        const double d = std::hypot(r.dx_mm, r.dy_mm);
-        const bool predicted = r.contact && r.has_displacement && d > thr;
-        slip.add(i, k, frame, predicted, et, thr);
-        if (predicted && et.sliding) ++sample.tp[i];
-        if (predicted && !et.sliding) ++sample.fp[i];
-        if (!predicted && et.sliding) ++sample.fn[i];
-        if (opt.record_series && predicted != et.sliding) {
-          result.series.mismatches.push_back(
-              {t, static_cast<int>(i), static_cast<std::uint32_t>(k), predicted, d, r.fz, et});
-        }
-
-        if (et.visible || r.contact) {
-          const double en = (r.contact ? r.fz : 0.0) - et.fz_n;
-          const double ex = (r.contact ? r.fx : 0.0) - et.fx_n;
-          const double ey = (r.contact ? r.fy : 0.0) - et.fy_n;
-          sq_normal += en * en;
-          sq_shear += ex * ex + ey * ey;
-          ++n_normal;
-          n_shear += 2;
-        }
-        if (r.contact) rep.max_fz_N = std::max(rep.max_fz_N, r.fz);
-        if (r.contact && r.has_displacement && d > best) {
-          best = d;
-          sample.dy_mm[i] = r.dy_mm;
-        }
-        sample.max_fz_measured[i] = std::max(sample.max_fz_measured[i], r.contact ? r.fz : 0.0);
-        sample.max_fz_true[i] = std::max(sample.max_fz_true[i], et.fz_n);
-        sample.true_slip[i] = sample.true_slip[i] || et.sliding;
-      }
-      sample.touch[i] = out.flags.fingertip[i].touch;
-      sample.slip[i] = out.flags.fingertip[i].slip;
-      sample.over[i] = out.flags.fingertip[i].over;
-      const Vec3 apex = world.fingertip(i).apex_world;
-      sample.fingertip_x_m[i] = apex.x * path_dir.x + apex.y * path_dir.y;
-    }
-    sample.phase = static_cast<std::uint8_t>(out.phase);
-    sample.twist_cycle = out.twist_cycle;
-    sample.cap_angle_deg = gt.cap_angle_deg;
-    sample.cap_z_m = gt.object_position_m.z;
-    sample.wrist_z_m = world.arm().position_m.z;
-    sample.wrist_yaw_rad = world.arm().yaw_rad;
-    sample.cap_yaw_rad = gt.cap_yaw_rad;
-    sample.cap_place = static_cast<std::uint8_t>(gt.place);
-
-    // True tightening: the cycle in which the cap angle first passed free_turn_deg.
-    if (gt.cap_tight && !rep.true_tight_cycle) {
-      rep.true_tight_cycle = static_cast<int>(out.twist_cycle);
-    }
-
-    // Events.
-    std::string snapshot_label;
-    for (const control::Event& e : out.events) {
-      switch (e.kind) {
-        case control::EventKind::kGraspClassified:
-          if (e.phase == control::Phase::kLift && !rep.grasp_classified) {
-            rep.grasp_classified = "grasp";
-          } else if (e.phase == control::Phase::kLower && !rep.release_classified) {
-            rep.release_classified = "grasp";
-          }
-          snapshot_label = "grasp classified";
-          break;
-        case control::EventKind::kReleaseClassified:
-          if (e.phase == control::Phase::kLift && !rep.grasp_classified) {
-            rep.grasp_classified = "release";
-          } else if (e.phase == control::Phase::kLower && !rep.release_classified) {
-            rep.release_classified = "release";
-          }
-          snapshot_label = "release classified";
-          break;
-        case control::EventKind::kRecompress:
-          ++rep.recompressions;
-          if (e.phase == control::Phase::kTransport && !transport_snapshot) {
-            transport_snapshot = true;
-            snapshot_label = "re-compression in transport";
-          }
-          break;
-        case control::EventKind::kOver:
-          ++rep.over_events;
-          break;
-        case control::EventKind::kCapTight:
-          if (!rep.tightened_cycle) rep.tightened_cycle = static_cast<int>(e.cycle);
-          snapshot_label = "cap tight";
-          break;
-        case control::EventKind::kDone:
-          rep.completed = true;
-          break;
-        case control::EventKind::kAborted:
-          rep.end_reason = std::string("aborted: ") + e.text;
-          break;
-        default:
-          break;
-      }
-      if (opt.record_series) {
-        EventRecord er;
-        er.t = t;
-        er.kind = static_cast<std::uint8_t>(e.kind);
-        er.kind_name = control::to_string(e.kind);
-        er.phase = control::to_string(e.phase);
-        er.cycle = e.cycle;
-        er.fingertip = e.fingertip;
-        er.value = e.value;
-        er.text = e.text;
-        result.series.events.push_back(std::move(er));
-      }
-    }
-    if (opt.record_series) {
-      result.series.frames.push_back(sample);
-      if (!snapshot_label.empty()) {
-        Snapshot snap;
-        snap.t = t;
-        snap.label = snapshot_label;
-        for (std::size_t i = 0; i < kFingertips; ++i) {
-          const auto readings = extractors[i].readings();
-          for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
-            const ElementReading& r = readings[k];
-            auto& s = snap.fingertips[i][k];
-            s.x_px = result.calibrations[i].elements[k].center_px.x;
-            s.y_px = result.calibrations[i].elements[k].center_px.y;
-            s.contact = r.contact;
-            s.slip = r.contact && r.has_displacement && std::hypot(r.dx_mm, r.dy_mm) > thr;
-            s.true_sliding = gt.fingertips[i].elements[k].sliding;
-            s.ux_mm = r.ux_mm;
-            s.uy_mm = r.uy_mm;
-            s.dx_mm = r.dx_mm;
-            s.dy_mm = r.dy_mm;
-            s.fz_n = r.fz;
-          }
-        }
-        result.series.snapshots.push_back(std::move(snap));
-      }
-    }
+    scorer.add_truth(frame, t, gt, {out.phase, out.twist_cycle}, frame_pose(world, transport));
+    for (std::size_t i = 0; i < kFingertips; ++i)
+      scorer.add_measurement(i, frame, extractors[i].readings(), gt.fingertips[i], phase);
+    for (const control::Event& e : out.events)
+      scorer.add_event(e, t);
 
     world.apply(to_world_command(out.command));
     phase = out.phase;
-    rep.twist_cycles = static_cast<int>(
-        std::max<std::uint32_t>(static_cast<std::uint32_t>(rep.twist_cycles), out.twist_cycle));
-    rep.final_cap_angle_deg = gt.cap_angle_deg;
     if (gt.dropped && dropped_at < 0) dropped_at = t;
 
     if (controller.done() && !done_seen) {
@@ -363,12 +191,7 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
     }
   }
 
-  slip.finish(rep.slip);
-  rep.dropped = world.cap().dropped;
-  rep.frames = frame;
-  rep.sim_time_s = static_cast<double>(frame) / sc.camera.fps;
-  rep.force_rmse_normal_N = n_normal > 0 ? std::sqrt(sq_normal / static_cast<double>(n_normal)) : 0;
-  rep.force_rmse_shear_N = n_shear > 0 ? std::sqrt(sq_shear / static_cast<double>(n_shear)) : 0;
+  scorer.finish(world.cap().dropped, static_cast<double>(frame) / sc.camera.fps, frame);
   return result;
 }
 

@@ -12,11 +12,11 @@
 #include <thread>
 
 #include "tactile/camera/fake_gv_camera.hpp"
-#include "tactile/config/calibration_file.hpp"
 #include "tactile/control/config.hpp"
 #include "tactile/rig/arm_link.hpp"
 #include "tactile/rig/optics.hpp"
 #include "tactile/rig/scoring.hpp"
+#include "tactile/rig/sensors.hpp"
 #include "tactile/rig/truth.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/fd.hpp"
@@ -99,362 +99,412 @@ class WakeTimer {
 struct KeptTruth {
   std::uint64_t frame = 0;
   double t = 0;
-  double threshold_mm = 0;
+  control::Phase phase = control::Phase::kIdle;  // the controller's, when it was taken
   GroundTruth truth;
   std::array<bool, kFingertips> scored{};
 };
 
-}  // namespace
+// A whole real-time run: the world stepped to the wall clock, the cameras fed, the arm link
+// served, sensor_node's frames and hand_node's events scored. One object per run: its members
+// are the run's state, its methods the loop's parts.
+class RealtimeRun {
+ public:
+  RealtimeRun(const Scenario& sc, const RealtimeOptions& opt);
+  RealtimeResult run();
 
-RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
-  RealtimeResult result;
-  LockstepResult& run = result.run;
-  const control::Config cfg = scenario_controller_config(sc);
-  World world(sc.world);
-  const double dt = sc.step_s();
-  const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / sc.camera.fps));
-  const auto lead_ns =
-      std::min(static_cast<std::int64_t>(opt.render_lead_s * 1e9), period_ns * 3 / 4);
+ private:
+  static LockstepResult& with_calibrations(LockstepResult& run, const SimulatedSensors& sensors) {
+    run.calibrations = sensors.calibrations();
+    return run;
+  }
+  void advance_to(std::int64_t t_ns);
+  void on_arm_message(std::int64_t now_ns);
+  void check_deadman(std::int64_t now_ns);
+  void on_frame();
+  void on_event();
+  // Serves the sockets until `render_ns` (or a stop).
+  void serve_until(std::int64_t render_ns);
+  // Renders and publishes frame `frame_` for its send instant and keeps its truth.
+  void render_frame(std::int64_t send_ns);
+  // Sends the peer the arm's state. False when the run ends: no hand_node came.
+  bool answer_arm(std::int64_t now_ns);
+  // True when the run ends after this frame.
+  bool ended_after_frame(std::int64_t now_ns);
+  void finish();
 
-  // Sensors: calibrations (written for sensor_node and hand_node), renderers, cameras.
-  const auto normals = world.element_normals();
-  const std::array<const char*, kFingertips> ids{"left", "right"};
-  std::vector<Renderer> renderers;
-  std::array<util::Random, kFingertips> frame_rng{util::Random(sc.seed * 4 + 1),
-                                                  util::Random(sc.seed * 4 + 2)};
-  std::array<Image, kFingertips> images;
-  std::vector<std::unique_ptr<camera::FakeGvCamera>> cameras;
+  const Scenario& sc_;
+  const RealtimeOptions& opt_;
+  RealtimeResult result_;
+  RealtimeCounters& c_ = result_.counters;
+  Report& rep_ = result_.run.report;
+  const control::Config cfg_;
+  World world_;
+  const double dt_;
+  const std::int64_t period_ns_;
+  const std::int64_t lead_ns_;
+  CameraParams cam_;
+  SimulatedSensors sensors_;
+  std::vector<std::unique_ptr<camera::FakeGvCamera>> cameras_;
+  RunScorer scorer_;
+  const Vec3 transport_;
+
+  zmq::context_t ctx_;
+  wire::Router arm_;
+  std::optional<wire::Publisher> truth_pub_;
+  wire::Subscriber frames_;
+  std::optional<wire::Subscriber> events_;
+  // Wakes the serving loop at the instant to render: ZeroMQ's poll counts whole milliseconds,
+  // and a timeout rounded up started the frame up to a millisecond late (images then published
+  // after their send instant), one rounded down would spin through the last millisecond.
+  const WakeTimer render_timer_;
+
+  // Reused buffers.
+  std::string from_;  // the sender of the message at hand
+  std::vector<std::uint8_t> payload_;
+  wire::TopicMessage msg_;
+  wire::EnvelopeDecoder decoder_;
+  v1::Envelope truth_env_;
+  v1::Envelope state_env_;
+  std::string out_;
+  wire::ReceivedCommand cmd_;
+  const wire::FingertipIds wire_ids_{kFingertipIds[0], kFingertipIds[1]};
+  std::array<wire::ReceivedFrame, kFingertips> measured_;
+  std::deque<KeptTruth> kept_;
+  std::vector<double> latencies_ms_;
+
+  std::int64_t start_ns_ = 0;
+  ArmPeer arm_peer_;
+  std::uint64_t last_command_ = 0;
+  control::Phase phase_ = control::Phase::kIdle;
+  std::uint32_t twist_cycle_ = 0;
+  bool ended_ = false;
+  std::int64_t ended_at_ns_ = 0;
+  std::int64_t dropped_at_ns_ = -1;
+  std::uint64_t frame_ = 0;
+  std::uint64_t first_frame_ = 0;
+};
+
+CameraParams realtime_camera(const Scenario& sc, const RealtimeOptions& opt) {
   CameraParams cam = sc.camera;
   cam.refresh_outside_disks = opt.full_noise;
+  return cam;
+}
+
+RealtimeRun::RealtimeRun(const Scenario& sc, const RealtimeOptions& opt)
+    : sc_(sc),
+      opt_(opt),
+      cfg_(scenario_controller_config(sc)),
+      world_(sc.world),
+      dt_(sc.step_s()),
+      period_ns_(static_cast<std::int64_t>(std::llround(1e9 / sc.camera.fps))),
+      lead_ns_(std::min(static_cast<std::int64_t>(opt.render_lead_s * 1e9), period_ns_ * 3 / 4)),
+      cam_(realtime_camera(sc, opt)),
+      sensors_(sc, cam_, world_.element_normals()),
+      scorer_(with_calibrations(result_.run, sensors_), cfg_, opt.record_series),
+      transport_(transport_direction(sc.world)),
+      arm_(ctx_, opt.arm_endpoint, opt.arm_security ? &*opt.arm_security : nullptr),
+      frames_(ctx_, opt.observe_frames, {wire::kFrameTopicPrefix},
+              opt.observe_security ? &*opt.observe_security : nullptr),
+      arm_peer_(static_cast<std::int64_t>(opt.deadman_s * 1e9)) {
+  // Sensors: calibrations (written for sensor_node and hand_node) and cameras.
+  const auto& ids = kFingertipIds;
+  if (!opt.calibration_dir.empty())
+    save_calibrations(opt.calibration_dir, result_.run.calibrations);
   for (std::size_t i = 0; i < kFingertips; ++i) {
-    run.calibrations[i] = make_calibration(ids[i], cam, sc.optics, normals);
-    if (!opt.calibration_dir.empty()) {
-      config::save_calibration(opt.calibration_dir / (std::string(ids[i]) + ".yaml"),
-                               run.calibrations[i]);
-    }
-    renderers.emplace_back(run.calibrations[i], cam, sc.optics, sc.seed * 4 + 3 + i * 7919);
     camera::FakeGvCameraOptions fo;
     fo.address = opt.camera_addresses[i];
     fo.serial = opt.camera_serials[i];
-    fo.width = cam.width;
-    fo.height = cam.height;
-    fo.pixel_format = cam.bit_depth == 8 ? PixelFormat::kMono8 : PixelFormat::kMono16;
-    fo.frame_rate_hz = cam.fps;
-    cameras.push_back(std::make_unique<camera::FakeGvCamera>(fo));
+    fo.width = cam_.width;
+    fo.height = cam_.height;
+    fo.pixel_format = cam_.bit_depth == 8 ? PixelFormat::kMono8 : PixelFormat::kMono16;
+    fo.frame_rate_hz = cam_.fps;
+    cameras_.push_back(std::make_unique<camera::FakeGvCamera>(fo));
     util::log_info("camera {} ({}) serving on {}", ids[i], fo.serial, fo.address);
   }
-  const Calibration& cal0 = run.calibrations[0];
-  TruthRecorder recorder(cal0.normal_curve(cal0.contact_on), sc.partial_slip_ratio);
-  RunScorer scorer(run, cfg, opt.record_series);
 
   // Sockets.
-  zmq::context_t ctx;
-  wire::Router arm(ctx, opt.arm_endpoint, opt.arm_security ? &*opt.arm_security : nullptr);
-  std::optional<wire::Publisher> truth_pub;
-  if (!opt.truth_endpoint.empty()) truth_pub.emplace(ctx, opt.truth_endpoint);
-  wire::Subscriber frames(ctx, opt.observe_frames, {wire::kFrameTopicPrefix},
-                          opt.observe_security ? &*opt.observe_security : nullptr);
-  std::optional<wire::Subscriber> events;
+  if (!opt.truth_endpoint.empty()) truth_pub_.emplace(ctx_, opt.truth_endpoint);
   if (!opt.observe_events.empty())
-    events.emplace(ctx, std::vector<std::string>{opt.observe_events},
-                   std::vector<std::string>{wire::kEventTopic});
-  util::log_info("arm controller on {}, ground truth on {}, deadman {:.0f} ms", arm.endpoint(),
-                 truth_pub ? truth_pub->endpoint() : std::string("(none)"), opt.deadman_s * 1e3);
+    events_.emplace(ctx_, std::vector<std::string>{opt.observe_events},
+                    std::vector<std::string>{wire::kEventTopic});
+  util::log_info("arm controller on {}, ground truth on {}, deadman {:.0f} ms", arm_.endpoint(),
+                 truth_pub_ ? truth_pub_->endpoint() : std::string("(none)"), opt.deadman_s * 1e3);
   if (opt.on_ready) opt.on_ready();
 
-  // Reused buffers.
-  std::string peer;  // the client the arm answers
-  std::string from;  // the sender of the message at hand
-  bool have_peer = false;
-  std::vector<std::uint8_t> payload;
-  wire::TopicMessage msg;
-  wire::EnvelopeDecoder decoder;
-  v1::Envelope truth_env;
-  v1::Envelope state_env;
-  std::string out;
-  wire::ReceivedCommand cmd;
-  const wire::FingertipIds wire_ids{"left", "right"};
-  std::array<wire::ReceivedFrame, kFingertips> measured;
   for (std::size_t i = 0; i < kFingertips; ++i)
-    measured[i].elements.resize(kElementsPerFingertip);
-  std::array<ElementLoad, kElementsPerFingertip> loads{};
-  std::deque<KeptTruth> kept;
-  std::vector<double> latencies_ms;
-  latencies_ms.reserve(1 << 16);
-  RealtimeCounters& c = result.counters;
+    measured_[i].elements.resize(kElementsPerFingertip);
+  latencies_ms_.reserve(1 << 16);
+}
 
-  const std::int64_t start_ns = util::realtime_ns();
-  std::int64_t last_heard_ns = 0;
-  bool deadman_tripped = false;
-  std::uint64_t last_command = 0;
-  control::Phase phase = control::Phase::kIdle;
-  std::uint32_t twist_cycle = 0;
-  bool ended = false;
-  std::int64_t ended_at_ns = 0;
-  std::int64_t dropped_at_ns = -1;
-  std::uint64_t frame = static_cast<std::uint64_t>((start_ns + lead_ns) / period_ns) + 1;
-  const std::uint64_t first_frame = frame;
-  Report& rep = run.report;
-  rep.end_reason = "max_time";
-
-  // Steps the world until its clock reaches the wall-clock instant `t_ns`.
-  const auto advance_to = [&](std::int64_t t_ns) {
-    const double target = static_cast<double>(t_ns - start_ns) * 1e-9;
-    while (world.time() + 0.5 * dt < target) {
-      if (!world.step(dt)) {
-        run.physics_finite = false;
-        break;
-      }
-    }
-  };
-
-  // The peer the arm answers: the first client that spoke (a heartbeat) or the last that sent a
-  // valid command. Garbage never changes it, and only its words keep the deadman from tripping.
-  const auto on_arm_message = [&](std::int64_t now_ns) {
-    const auto st = decoder.decode(payload);
-    const v1::Envelope& env = decoder.envelope();
-    if (st != wire::DecodeStatus::kOk) {
-      ++c.invalid_commands;
-      return;
-    }
-    if (env.has_heartbeat()) {
-      if (!have_peer) {
-        util::log_info("hand_node connected");
-      } else if (from != peer && deadman_tripped) {
-        // The old client fell silent and the arm is held: a new one (a restarted hand_node)
-        // takes over.
-        util::log_info("a new client takes over after the deadman hold");
-      } else if (from != peer) {
-        ++c.invalid_commands;  // another client's heartbeat while ours is alive: refused
-        return;
-      }
-      peer = from;
-      have_peer = true;
-      last_heard_ns = now_ns;
-      return;
-    }
-    if (!env.has_arm_command() ||
-        wire::read_arm_command(env.arm_command(), wire_ids, cmd) != wire::DecodeStatus::kOk) {
-      ++c.invalid_commands;
-      return;
-    }
-    if (!have_peer) util::log_info("hand_node connected");
-    if (have_peer && from != peer) util::log_warn("commands now come from another client");
-    peer = from;
-    have_peer = true;
-    last_heard_ns = now_ns;
-    // The deadman hold lasts until hand_node commands again (its ArmStates carry the fault).
-    if (deadman_tripped) {
-      util::log_info("hand_node commands again after the deadman hold");
-      deadman_tripped = false;
-    }
-    ++c.commands;
-    last_command = cmd.sequence;
-    for (std::size_t i = 0; i < cmd.answers.count; ++i) {
-      const std::int64_t cam_ts = cmd.answers.refs[i].camera_timestamp_ns;
-      if (cam_ts <= 0) continue;
-      const double ms = static_cast<double>(now_ns - cam_ts) * 1e-6;
-      latencies_ms.push_back(ms);
-      // Answers older than a period are the tail of latency_ms: say which they were.
-      if (now_ns - cam_ts > period_ns) {
-        util::log_debug("command {} answered frame {} of fingertip {} {:.2f} ms after its exposure",
-                        cmd.sequence, cmd.answers.refs[i].sequence, cmd.answers.refs[i].fingertip,
-                        ms);
-      }
-    }
-    advance_to(now_ns);  // the command acts from the moment it arrived
-    if (!world.apply(to_world_command(cmd.command))) ++c.invalid_commands;
-  };
-
-  // Holds the arm once hand_node has been silent longer than the deadman. Checked whenever the
-  // sockets are served (at most 5 ms apart), not only once per frame: at 30 fps a check per
-  // frame would hold the arm up to a period late.
-  const auto check_deadman = [&](std::int64_t now_ns) {
-    if (!have_peer || deadman_tripped ||
-        now_ns - last_heard_ns <= static_cast<std::int64_t>(opt.deadman_s * 1e9))
-      return;
-    deadman_tripped = true;
-    ++c.deadman_trips;
-    advance_to(now_ns);  // the hold acts from the moment it was decided
-    world.apply(to_world_command(control::Command::hold()));
-    util::log_warn("deadman: nothing from hand_node for {:.0f} ms: arm held",
-                   static_cast<double>(now_ns - last_heard_ns) * 1e-6);
-  };
-
-  const auto on_frame = [&]() {
-    if (decoder.decode(msg.payload) != wire::DecodeStatus::kOk) return;
-    const v1::Envelope& env = decoder.envelope();
-    if (!env.has_tactile_frame()) return;
-    const v1::TactileFrame& f = env.tactile_frame();
-    const std::size_t tip = f.sensor_id() == "left"    ? 0
-                            : f.sensor_id() == "right" ? 1
-                                                       : kFingertips;
-    if (tip == kFingertips) return;
-    if (f.status() != v1::FRAME_STATUS_COMPLETE) {
-      if (f.status() != v1::FRAME_STATUS_NO_REFERENCE) ++c.frames_incomplete;
-      return;
-    }
-    if (wire::read_tactile_frame(f, run.calibrations[tip], measured[tip]) !=
-        wire::DecodeStatus::kOk)
-      return;
-    const auto it = std::find_if(kept.begin(), kept.end(), [&](const KeptTruth& k) {
-      return k.truth.fingertips[tip].camera_timestamp_ns == f.camera_timestamp_ns();
-    });
-    if (it == kept.end() || it->scored[tip]) {
-      ++c.frames_unmatched;  // an image the camera sent again, or one older than the window
-      return;
-    }
-    it->scored[tip] = true;
-    ++c.frames_scored;
-    scorer.add_measurement(tip, it->frame - first_frame, it->t, measured[tip].elements,
-                           it->truth.fingertips[tip], it->threshold_mm, world);
-  };
-
-  const auto on_event = [&]() {
-    if (decoder.decode(msg.payload) != wire::DecodeStatus::kOk) return;
-    const v1::Envelope& env = decoder.envelope();
-    if (!env.has_event()) return;
-    const v1::Event& e = env.event();
-    ++c.events;
-    const auto p = wire::phase_from_string(e.phase());
-    if (p) phase = *p;
-    twist_cycle = std::max(twist_cycle, e.cycle());
-    const double t = static_cast<double>(util::realtime_ns() - start_ns) * 1e-9;
-    scorer.add_event(static_cast<control::EventKind>(e.kind()), p.value_or(phase), e.cycle(),
-                     e.text(), e.value(), t);
-    if (e.kind() == v1::EVENT_KIND_DONE || e.kind() == v1::EVENT_KIND_ABORTED) {
-      if (!ended) {
-        ended = true;
-        ended_at_ns = util::realtime_ns();
-      }
-    }
-  };
-
-  std::array<zmq::socket_ref, 3> sockets{arm.socket(), frames.socket(),
-                                         events ? events->socket() : frames.socket()};
-  // Wakes the serving loop at the instant to render: ZeroMQ's poll counts whole milliseconds, and
-  // a timeout rounded up started the frame up to a millisecond late (images then published after
-  // their send instant), one rounded down would spin through the last millisecond.
-  const WakeTimer render_timer;
-  const auto max_ns = static_cast<std::int64_t>(sc.max_time_s * 1e9);
-  while (!util::stop_requested()) {
-    const std::int64_t send_ns = static_cast<std::int64_t>(frame) * period_ns;
-    const std::int64_t render_ns = send_ns - lead_ns;
-    // Serve the sockets until it is time to render the next frame.
-    for (;;) {
-      std::int64_t now = util::realtime_ns();
-      const std::int64_t wait_ns = render_ns - now;
-      if (wait_ns > 0) {
-        render_timer.arm_at(render_ns);
-        wire::poll_readable(sockets, milliseconds(std::min<std::int64_t>(wait_ns / 1000000 + 1, 5)),
-                            render_timer.fd());
-      }
-      now = util::realtime_ns();
-      while (arm.receive(from, payload, milliseconds(0)))
-        on_arm_message(util::realtime_ns());
-      while (frames.receive(msg, milliseconds(0)))
-        on_frame();
-      while (events && events->receive(msg, milliseconds(0)))
-        on_event();
-      check_deadman(util::realtime_ns());
-      if (now >= render_ns || util::stop_requested()) break;
-    }
-    const std::int64_t now = util::realtime_ns();
-    if (now > send_ns) {
-      // Too late for this frame: the camera sends the previous image again. Skip to the next.
-      ++c.late_renders;
-      frame = static_cast<std::uint64_t>((now + lead_ns) / period_ns) + 1;
-      continue;
-    }
-
-    // The world at the instant the camera sends the frame.
-    const std::int64_t started_ns = now;
-    advance_to(send_ns);
-    const std::int64_t stepped_ns = util::realtime_ns();
-    const double thr = cfg.dr_mm * (control::is_twist_phase(phase) ? cfg.twist_dr_factor : 1.0);
-    const GroundTruth& gt = recorder.take(world, frame, thr);
-    KeptTruth kt;
-    kt.frame = frame;
-    kt.t = world.time();
-    kt.threshold_mm = thr;
-    kt.truth = gt;
-    kt.truth.twist_cycle = twist_cycle;
-    for (auto& ft : kt.truth.fingertips)
-      ft.camera_timestamp_ns = send_ns;
-    for (std::size_t i = 0; i < kFingertips; ++i) {
-      for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
-        const ElementTruth& et = gt.fingertips[i].elements[k];
-        loads[k] = {et.fz_n, et.ux_mm, et.uy_mm};
-      }
-      renderers[i].render(loads, frame_rng[i], images[i]);
-      if (!cameras[i]->publish(images[i].view(), frame, send_ns)) {
-        util::log_warn("camera {}: a receiver set another format; frame not published", ids[i]);
-      }
-    }
-    ++c.frames_rendered;
-    if (const std::int64_t published_ns = util::realtime_ns(); published_ns > send_ns) {
-      ++c.late_publishes;
-      util::log_debug(
-          "frame {} published {:.2f} ms after its send instant: started {:.2f} ms before it, "
-          "world {:.2f} ms, images {:.2f} ms",
-          frame, static_cast<double>(published_ns - send_ns) * 1e-6,
-          static_cast<double>(send_ns - started_ns) * 1e-6,
-          static_cast<double>(stepped_ns - started_ns) * 1e-6,
-          static_cast<double>(published_ns - stepped_ns) * 1e-6);
-    }
-    scorer.add_truth(kt.truth, twist_cycle);
-    if (truth_pub) {
-      fill_truth_message(kt.truth, util::realtime_ns(), *truth_env.mutable_ground_truth());
-      wire::encode(truth_env, out);
-      truth_pub->send(wire::kTruthTopic, wire::bytes_of(out));
-    }
-    kept.push_back(std::move(kt));
-    while (kept.size() > 64)
-      kept.pop_front();
-
-    const std::int64_t after = util::realtime_ns();
-    if (have_peer) {
-      wire::fill_arm_state(arm_state_of(world, after, last_command), wire_ids,
-                           *state_env.mutable_arm_state());
-      if (deadman_tripped) state_env.mutable_arm_state()->add_faults(v1::ARM_FAULT_DEADMAN);
-      wire::encode(state_env, out);
-      arm.send(peer, wire::bytes_of(out));
-      check_deadman(after);
-    } else if (after - start_ns > static_cast<std::int64_t>(opt.wait_for_hand_s * 1e9)) {
-      rep.end_reason = "no hand_node";
+// Steps the world until its clock reaches the wall-clock instant `t_ns`.
+void RealtimeRun::advance_to(std::int64_t t_ns) {
+  const double target = static_cast<double>(t_ns - start_ns_) * 1e-9;
+  while (world_.time() + 0.5 * dt_ < target) {
+    if (!world_.step(dt_)) {
+      result_.run.physics_finite = false;
       break;
     }
-
-    if (world.cap().dropped && dropped_at_ns < 0) dropped_at_ns = after;
-    if (ended && after - ended_at_ns >= static_cast<std::int64_t>(sc.settle_after_done_s * 1e9))
-      break;
-    if (dropped_at_ns >= 0 && after - dropped_at_ns >= 500'000'000) {
-      rep.end_reason = "dropped";
-      break;
-    }
-    if (after - start_ns >= max_ns) break;
-    if (!run.physics_finite) {
-      rep.end_reason = "physics";
-      break;
-    }
-    ++frame;
   }
-  if (util::stop_requested() && !ended) rep.end_reason = "stopped";
-  scorer.finish(world, static_cast<double>(util::realtime_ns() - start_ns) * 1e-9,
-                frame - first_frame);
-  if (ended && rep.completed) rep.end_reason = "done";
-  if (!latencies_ms.empty()) {
-    result.latency_samples = latencies_ms.size();
-    rep.latency_ms = Report::Latency{nearest_rank_percentile(latencies_ms, 0.50),
-                                     nearest_rank_percentile(latencies_ms, 0.99),
-                                     *std::max_element(latencies_ms.begin(), latencies_ms.end())};
+}
+
+void RealtimeRun::on_arm_message(std::int64_t now_ns) {
+  const auto st = decoder_.decode(payload_);
+  const v1::Envelope& env = decoder_.envelope();
+  if (st != wire::DecodeStatus::kOk) {
+    ++c_.invalid_commands;
+    return;
+  }
+  if (env.has_heartbeat()) {
+    const ArmPeer::Heard h = arm_peer_.heartbeat(from_, now_ns);
+    if (!h.accepted) {
+      ++c_.invalid_commands;  // another client's heartbeat while ours is alive: refused
+      return;
+    }
+    if (h.connected) util::log_info("hand_node connected");
+    // The old client fell silent and the arm is held: a new one (a restarted hand_node) takes
+    // over.
+    if (h.new_client) util::log_info("a new client takes over after the deadman hold");
+    return;
+  }
+  if (!env.has_arm_command() ||
+      wire::read_arm_command(env.arm_command(), wire_ids_, cmd_) != wire::DecodeStatus::kOk) {
+    ++c_.invalid_commands;
+    return;
+  }
+  const ArmPeer::Heard h = arm_peer_.command(from_, now_ns);
+  if (h.connected) util::log_info("hand_node connected");
+  if (h.new_client) util::log_warn("commands now come from another client");
+  if (h.resumed) util::log_info("hand_node commands again after the deadman hold");
+  ++c_.commands;
+  last_command_ = cmd_.sequence;
+  for (std::size_t i = 0; i < cmd_.answers.count; ++i) {
+    const std::int64_t cam_ts = cmd_.answers.refs[i].camera_timestamp_ns;
+    if (cam_ts <= 0) continue;
+    const double ms = static_cast<double>(now_ns - cam_ts) * 1e-6;
+    latencies_ms_.push_back(ms);
+    // Answers older than a period are the tail of latency_ms: say which they were.
+    if (now_ns - cam_ts > period_ns_) {
+      util::log_debug("command {} answered frame {} of fingertip {} {:.2f} ms after its exposure",
+                      cmd_.sequence, cmd_.answers.refs[i].sequence, cmd_.answers.refs[i].fingertip,
+                      ms);
+    }
+  }
+  advance_to(now_ns);  // the command acts from the moment it arrived
+  if (!world_.apply(to_world_command(cmd_.command))) ++c_.invalid_commands;
+}
+
+// Checked whenever the sockets are served (at most 5 ms apart), not only once per frame: at
+// 30 fps a check per frame would hold the arm up to a period late.
+void RealtimeRun::check_deadman(std::int64_t now_ns) {
+  if (!arm_peer_.deadman_trips(now_ns)) return;
+  ++c_.deadman_trips;
+  advance_to(now_ns);  // the hold acts from the moment it was decided
+  world_.apply(to_world_command(control::Command::hold()));
+  util::log_warn("deadman: nothing from hand_node for {:.0f} ms: arm held",
+                 static_cast<double>(now_ns - arm_peer_.last_heard_ns()) * 1e-6);
+}
+
+void RealtimeRun::on_frame() {
+  if (decoder_.decode(msg_.payload) != wire::DecodeStatus::kOk) return;
+  const v1::Envelope& env = decoder_.envelope();
+  if (!env.has_tactile_frame()) return;
+  const v1::TactileFrame& f = env.tactile_frame();
+  const std::size_t tip = f.sensor_id() == kFingertipIds[0]   ? 0
+                          : f.sensor_id() == kFingertipIds[1] ? 1
+                                                              : kFingertips;
+  if (tip == kFingertips) return;
+  if (f.status() != v1::FRAME_STATUS_COMPLETE) {
+    if (f.status() != v1::FRAME_STATUS_NO_REFERENCE) ++c_.frames_incomplete;
+    return;
+  }
+  if (wire::read_tactile_frame(f, result_.run.calibrations[tip], measured_[tip]) !=
+      wire::DecodeStatus::kOk)
+    return;
+  const auto it = std::find_if(kept_.begin(), kept_.end(), [&](const KeptTruth& k) {
+    return k.truth.fingertips[tip].camera_timestamp_ns == f.camera_timestamp_ns();
+  });
+  if (it == kept_.end() || it->scored[tip]) {
+    ++c_.frames_unmatched;  // an image the camera sent again, or one older than the window
+    return;
+  }
+  it->scored[tip] = true;
+  ++c_.frames_scored;
+  scorer_.add_measurement(tip, it->frame - first_frame_, measured_[tip].elements,
+                          it->truth.fingertips[tip], it->phase);
+}
+
+void RealtimeRun::on_event() {
+  if (decoder_.decode(msg_.payload) != wire::DecodeStatus::kOk) return;
+  const v1::Envelope& env = decoder_.envelope();
+  if (!env.has_event()) return;
+  const v1::Event& e = env.event();
+  ++c_.events;
+  const auto p = wire::phase_from_string(e.phase());
+  if (p) phase_ = *p;
+  twist_cycle_ = std::max(twist_cycle_, e.cycle());
+  const double t = static_cast<double>(util::realtime_ns() - start_ns_) * 1e-9;
+  control::Event ce;
+  ce.kind = static_cast<control::EventKind>(e.kind());
+  ce.phase = p.value_or(phase_);
+  ce.cycle = e.cycle();
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    if (e.sensor_id() == kFingertipIds[i]) ce.fingertip = static_cast<std::int8_t>(i);
+  }
+  ce.value = e.value();
+  ce.text = e.text().c_str();  // copied by the scorer
+  scorer_.add_event(ce, t);
+  if (e.kind() == v1::EVENT_KIND_DONE || e.kind() == v1::EVENT_KIND_ABORTED) {
+    if (!ended_) {
+      ended_ = true;
+      ended_at_ns_ = util::realtime_ns();
+    }
+  }
+}
+
+void RealtimeRun::serve_until(std::int64_t render_ns) {
+  std::array<zmq::socket_ref, 3> sockets{arm_.socket(), frames_.socket(),
+                                         events_ ? events_->socket() : frames_.socket()};
+  for (;;) {
+    std::int64_t now = util::realtime_ns();
+    const std::int64_t wait_ns = render_ns - now;
+    if (wait_ns > 0) {
+      render_timer_.arm_at(render_ns);
+      wire::poll_readable(sockets, milliseconds(std::min<std::int64_t>(wait_ns / 1000000 + 1, 5)),
+                          render_timer_.fd());
+    }
+    now = util::realtime_ns();
+    while (arm_.receive(from_, payload_, milliseconds(0)))
+      on_arm_message(util::realtime_ns());
+    while (frames_.receive(msg_, milliseconds(0)))
+      on_frame();
+    while (events_ && events_->receive(msg_, milliseconds(0)))
+      on_event();
+    check_deadman(util::realtime_ns());
+    if (now >= render_ns || util::stop_requested()) break;
+  }
+}
+
+void RealtimeRun::render_frame(std::int64_t send_ns) {
+  const std::int64_t started_ns = util::realtime_ns();
+  advance_to(send_ns);
+  const std::int64_t stepped_ns = util::realtime_ns();
+  const GroundTruth& gt = sensors_.truth().take(world_, frame_, slip_threshold_mm(cfg_, phase_));
+  KeptTruth kt;
+  kt.frame = frame_;
+  kt.t = world_.time();
+  kt.phase = phase_;
+  kt.truth = gt;
+  kt.truth.twist_cycle = twist_cycle_;
+  for (auto& ft : kt.truth.fingertips)
+    ft.camera_timestamp_ns = send_ns;
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    if (!cameras_[i]->publish(sensors_.render(i, gt.fingertips[i]).view(), frame_, send_ns)) {
+      util::log_warn("camera {}: a receiver set another format; frame not published",
+                     kFingertipIds[i]);
+    }
+  }
+  ++c_.frames_rendered;
+  if (const std::int64_t published_ns = util::realtime_ns(); published_ns > send_ns) {
+    ++c_.late_publishes;
+    util::log_debug(
+        "frame {} published {:.2f} ms after its send instant: started {:.2f} ms before it, "
+        "world {:.2f} ms, images {:.2f} ms",
+        frame_, static_cast<double>(published_ns - send_ns) * 1e-6,
+        static_cast<double>(send_ns - started_ns) * 1e-6,
+        static_cast<double>(stepped_ns - started_ns) * 1e-6,
+        static_cast<double>(published_ns - stepped_ns) * 1e-6);
+  }
+  scorer_.add_truth(frame_ - first_frame_, kt.t, kt.truth, {phase_, twist_cycle_},
+                    frame_pose(world_, transport_));
+  if (truth_pub_) {
+    fill_truth_message(kt.truth, util::realtime_ns(), *truth_env_.mutable_ground_truth());
+    wire::encode(truth_env_, out_);
+    truth_pub_->send(wire::kTruthTopic, wire::bytes_of(out_));
+  }
+  kept_.push_back(std::move(kt));
+  while (kept_.size() > 64)
+    kept_.pop_front();
+}
+
+bool RealtimeRun::answer_arm(std::int64_t now_ns) {
+  if (arm_peer_.has_peer()) {
+    wire::fill_arm_state(arm_state_of(world_, now_ns, last_command_), wire_ids_,
+                         *state_env_.mutable_arm_state());
+    if (arm_peer_.held()) state_env_.mutable_arm_state()->add_faults(v1::ARM_FAULT_DEADMAN);
+    wire::encode(state_env_, out_);
+    arm_.send(arm_peer_.peer(), wire::bytes_of(out_));
+    check_deadman(now_ns);
+    return true;
+  }
+  if (now_ns - start_ns_ > static_cast<std::int64_t>(opt_.wait_for_hand_s * 1e9)) {
+    rep_.end_reason = "no hand_node";
+    return false;
+  }
+  return true;
+}
+
+bool RealtimeRun::ended_after_frame(std::int64_t now_ns) {
+  if (world_.cap().dropped && dropped_at_ns_ < 0) dropped_at_ns_ = now_ns;
+  if (ended_ && now_ns - ended_at_ns_ >= static_cast<std::int64_t>(sc_.settle_after_done_s * 1e9))
+    return true;
+  if (dropped_at_ns_ >= 0 && now_ns - dropped_at_ns_ >= 500'000'000) {
+    rep_.end_reason = "dropped";
+    return true;
+  }
+  if (now_ns - start_ns_ >= static_cast<std::int64_t>(sc_.max_time_s * 1e9)) return true;
+  if (!result_.run.physics_finite) {
+    rep_.end_reason = "physics";
+    return true;
+  }
+  return false;
+}
+
+void RealtimeRun::finish() {
+  if (util::stop_requested() && !ended_) rep_.end_reason = "stopped";
+  scorer_.finish(world_.cap().dropped, static_cast<double>(util::realtime_ns() - start_ns_) * 1e-9,
+                 frame_ - first_frame_);
+  if (ended_ && rep_.completed) rep_.end_reason = "done";
+  if (!latencies_ms_.empty()) {
+    result_.latency_samples = latencies_ms_.size();
+    rep_.latency_ms = Report::Latency{
+        nearest_rank_percentile(latencies_ms_, 0.50), nearest_rank_percentile(latencies_ms_, 0.99),
+        *std::max_element(latencies_ms_.begin(), latencies_ms_.end())};
   }
   util::log_info(
       "frames rendered {} (late {}, published late {}), scored {} (unmatched {}, incomplete {}), "
       "commands {} (refused {}), deadman trips {}, events {}",
-      c.frames_rendered, c.late_renders, c.late_publishes, c.frames_scored, c.frames_unmatched,
-      c.frames_incomplete, c.commands, c.invalid_commands, c.deadman_trips, c.events);
-  return result;
+      c_.frames_rendered, c_.late_renders, c_.late_publishes, c_.frames_scored, c_.frames_unmatched,
+      c_.frames_incomplete, c_.commands, c_.invalid_commands, c_.deadman_trips, c_.events);
+}
+
+RealtimeResult RealtimeRun::run() {
+  start_ns_ = util::realtime_ns();
+  frame_ = static_cast<std::uint64_t>((start_ns_ + lead_ns_) / period_ns_) + 1;
+  first_frame_ = frame_;
+  rep_.end_reason = "max_time";
+  while (!util::stop_requested()) {
+    const std::int64_t send_ns = static_cast<std::int64_t>(frame_) * period_ns_;
+    serve_until(send_ns - lead_ns_);
+    const std::int64_t now = util::realtime_ns();
+    if (now > send_ns) {
+      // Too late for this frame: the camera sends the previous image again. Skip to the next.
+      ++c_.late_renders;
+      frame_ = static_cast<std::uint64_t>((now + lead_ns_) / period_ns_) + 1;
+      continue;
+    }
+    render_frame(send_ns);  // the world at the instant the camera sends the frame
+    const std::int64_t after = util::realtime_ns();
+    if (!answer_arm(after) || ended_after_frame(after)) break;
+    ++frame_;
+  }
+  finish();
+  return std::move(result_);
+}
+
+}  // namespace
+
+RealtimeResult run_realtime(const Scenario& sc, const RealtimeOptions& opt) {
+  return RealtimeRun(sc, opt).run();
 }
 
 std::string hand_controller_yaml(const Scenario& sc) {
@@ -478,14 +528,9 @@ std::string hand_controller_yaml(const Scenario& sc) {
 
 void write_node_configs(const Scenario& sc, const std::filesystem::path& dir,
                         const RealtimeOptions& opt) {
-  World world(sc.world);
-  const auto normals = world.element_normals();
-  CameraParams cam = sc.camera;
-  const std::array<const char*, kFingertips> ids{"left", "right"};
-  for (std::size_t i = 0; i < kFingertips; ++i) {
-    config::save_calibration(dir / (std::string(ids[i]) + ".yaml"),
-                             make_calibration(ids[i], cam, sc.optics, normals));
-  }
+  const World world(sc.world);
+  save_calibrations(dir, simulated_calibrations(sc, sc.camera, world.element_normals()));
+  const auto& ids = kFingertipIds;
   std::string sensor = fmt::format(
       "# sensor_node for the rig's scenario {} (written by rig --write-configs)\n"
       "format: tactile-sensor/1\n"
@@ -519,8 +564,7 @@ void write_node_configs(const Scenario& sc, const std::filesystem::path& dir,
       "# Between frames the controller runs only when a frame is half a period late: its timed\n"
       "# transitions run on frames and answer fresh ones.\n"
       "control_period_s: {}\n",
-      sc.source, opt.deadman_s * 1e3, opt.deadman_s / 4, 0.4 / sc.camera.fps,
-      1.5 / sc.camera.fps);
+      sc.source, opt.deadman_s * 1e3, opt.deadman_s / 4, 0.4 / sc.camera.fps, 1.5 / sc.camera.fps);
   hand += hand_controller_yaml(sc);
   util::write_file_atomic(dir / "hand_node.yaml", hand);
 }

@@ -105,6 +105,7 @@ struct Report {
 
 // One camera frame of the run, for plots.
 struct FrameSample {
+  std::uint64_t frame = 0;  // counted from the start of the run
   double t = 0;
   std::uint8_t phase = 0;  // control::Phase
   std::uint32_t twist_cycle = 0;

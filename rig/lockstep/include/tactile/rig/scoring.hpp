@@ -1,0 +1,91 @@
+#pragma once
+
+// The one scorer of a rig run (docs/rig.md, "Lockstep runner and report"; architecture.md,
+// rule 9): it scores the measured frames against the truth of the same instant, element-frame by
+// element-frame, tallies the controller's events into the report and records the series. The
+// lockstep runner feeds it frame by frame; the real-time rig feeds it the truth when it renders
+// and the measured frames and events as they arrive over the wire, later and interleaved. Both
+// get the same metrics for the same stream (ScoringTest). No clock: times are arguments.
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "tactile/control/config.hpp"
+#include "tactile/control/flag_analyzer.hpp"
+#include "tactile/control/types.hpp"
+#include "tactile/reading.hpp"
+#include "tactile/rig/lockstep.hpp"
+#include "tactile/rig/scenario.hpp"
+#include "tactile/rig/truth.hpp"
+#include "tactile/rig/world.hpp"
+
+namespace tactile::rig {
+
+// The measurement's slip threshold while the controller is in `phase`: dr, or dr times the
+// twist factor in Phase II (the control core's own FlagAnalyzer::dr).
+double slip_threshold_mm(const control::Config& cfg, control::Phase phase);
+
+// Where the hand is at a frame's instant, for the series: the paper's Fig. 10 x (the apex's
+// position along the transport) and the wrist.
+struct FramePose {
+  std::array<double, kFingertips> fingertip_x_m{};
+  double wrist_z_m = 0;
+  double wrist_yaw_rad = 0;
+};
+
+// The transport's direction: horizontal, from the cap's place to the bottle.
+Vec3 transport_direction(const WorldParams& world);
+// The world's pose at this instant, with x measured along `transport` (transport_direction).
+FramePose frame_pose(const World& world, Vec3 transport);
+
+// What the controller had decided when a frame was taken.
+struct ControllerState {
+  control::Phase phase = control::Phase::kIdle;
+  std::uint32_t twist_cycle = 0;
+};
+
+class RunScorer {
+ public:
+  // Fills `run.report` and (with `record_series`) `run.series`; `run.calibrations` must be set.
+  RunScorer(LockstepResult& run, const control::Config& cfg, bool record_series);
+
+  // The truth of one rendered frame (`frame` counted from the start), the controller's state
+  // then and the hand's pose: a series sample, the cap and tightening facts.
+  void add_truth(std::uint64_t frame, double t, const GroundTruth& truth,
+                 const ControllerState& controller, const FramePose& pose);
+  // One measured frame of one fingertip with the truth of the same frame (add_truth first).
+  // `phase` is the controller's phase the frame was taken in: it sets the slip threshold.
+  void add_measurement(std::size_t fingertip, std::uint64_t frame,
+                       std::span<const ElementReading> measured, const FingertipTruth& truth,
+                       control::Phase phase);
+  void add_event(const control::Event& event, double t);
+  // Closes the metrics.
+  void finish(bool dropped, double sim_time_s, std::uint64_t frames);
+
+ private:
+  FrameSample* sample_for(std::uint64_t frame);
+  void snapshot(double t, const char* label);
+
+  LockstepResult& run_;
+  control::FlagAnalyzer flags_;
+  bool record_;
+  SlipScorer slip_;
+  // Per fingertip, summed in fingertip order at the end: the real-time rig gets the two
+  // fingertips' frames in either order, and a sum's rounding must not depend on it.
+  std::array<double, kFingertips> sq_normal_{};
+  std::array<double, kFingertips> sq_shear_{};
+  std::uint64_t n_normal_ = 0;
+  std::uint64_t n_shear_ = 0;
+  bool transport_snapshot_ = false;
+  // The latest measured frame of each fingertip, for the snapshots at events.
+  struct Latest {
+    std::array<ElementReading, kElementsPerFingertip> readings{};
+    std::array<bool, kElementsPerFingertip> true_sliding{};
+    double threshold_mm = 0;
+  };
+  std::array<Latest, kFingertips> latest_{};
+};
+
+}  // namespace tactile::rig

@@ -1,0 +1,54 @@
+#pragma once
+
+// The simulated sensors of a rig run, set up once for the lockstep runner and the real-time rig
+// alike (architecture.md, rule 9): both fingertips' calibrations, renderers and per-frame noise
+// generators (seeds mixed from the scenario's seed), and the truth recorder at the sensors' own
+// contact threshold.
+#include <array>
+#include <filesystem>
+#include <span>
+#include <vector>
+
+#include "tactile/calibration.hpp"
+#include "tactile/image.hpp"
+#include "tactile/rig/optics.hpp"
+#include "tactile/rig/scenario.hpp"
+#include "tactile/rig/truth.hpp"
+#include "tactile/util/random.hpp"
+
+namespace tactile::rig {
+
+// The fingertips' sensor ids, in fingertip order.
+inline constexpr std::array<const char*, kFingertips> kFingertipIds{"left", "right"};
+
+// The two simulated sensors' calibrations for this scenario and camera.
+std::array<Calibration, kFingertips> simulated_calibrations(const Scenario& scenario,
+                                                            const CameraParams& camera,
+                                                            std::span<const Vec3> normals);
+// Writes each as `dir`/<sensor_id>.yaml (tactile-calibration/1), the files sensor_node and
+// hand_node load; returns the paths written. Throws when a file cannot be written.
+std::vector<std::filesystem::path> save_calibrations(
+    const std::filesystem::path& dir, const std::array<Calibration, kFingertips>& calibrations);
+
+class SimulatedSensors {
+ public:
+  // `camera`: the scenario's camera, or one the real-time rig changed (refresh_outside_disks).
+  SimulatedSensors(const Scenario& scenario, const CameraParams& camera,
+                   std::span<const Vec3> normals);
+
+  const std::array<Calibration, kFingertips>& calibrations() const { return calibrations_; }
+  TruthRecorder& truth() { return truth_; }
+  // Renders fingertip i's image of the loads in `truth` (all zero: no load). Allocates nothing
+  // once the image has its size.
+  const Image& render(std::size_t fingertip, const FingertipTruth& truth);
+
+ private:
+  std::array<Calibration, kFingertips> calibrations_;
+  std::vector<Renderer> renderers_;
+  std::array<util::Random, kFingertips> frame_rng_;
+  std::array<Image, kFingertips> images_;
+  std::array<ElementLoad, kElementsPerFingertip> loads_{};
+  TruthRecorder truth_;
+};
+
+}  // namespace tactile::rig

@@ -1,0 +1,232 @@
+#include "tactile/rig/scoring.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace tactile::rig {
+
+double slip_threshold_mm(const control::Config& cfg, control::Phase phase) {
+  return control::FlagAnalyzer(cfg).dr(control::is_twist_phase(phase));
+}
+
+Vec3 transport_direction(const WorldParams& w) {
+  const Vec3 d{w.bottle.x_m - w.cap.x_m, w.bottle.y_m - w.cap.y_m, 0};
+  return norm(d) > 0 ? (1.0 / norm(d)) * d : Vec3{1, 0, 0};
+}
+
+FramePose frame_pose(const World& world, Vec3 transport) {
+  FramePose p;
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    const Vec3 apex = world.fingertip(i).apex_world;
+    p.fingertip_x_m[i] = apex.x * transport.x + apex.y * transport.y;
+  }
+  p.wrist_z_m = world.arm().position_m.z;
+  p.wrist_yaw_rad = world.arm().yaw_rad;
+  return p;
+}
+
+RunScorer::RunScorer(LockstepResult& run, const control::Config& cfg, bool record_series)
+    : run_(run), flags_(cfg), record_(record_series) {
+  const Calibration& cal = run.calibrations[0];
+  run_.report.normal_full_scale_N = cal.normal_curve.y().back();
+}
+
+FrameSample* RunScorer::sample_for(std::uint64_t frame) {
+  auto& frames = run_.series.frames;
+  for (std::size_t n = 0; n < std::min<std::size_t>(frames.size(), 128); ++n) {
+    FrameSample& s = frames[frames.size() - 1 - n];
+    if (s.frame == frame) return &s;
+  }
+  return nullptr;
+}
+
+void RunScorer::add_truth(std::uint64_t frame, double t, const GroundTruth& gt,
+                          const ControllerState& controller, const FramePose& pose) {
+  Report& rep = run_.report;
+  // True tightening: the controller's cycle when the cap angle first passed free_turn_deg.
+  if (gt.cap_tight && !rep.true_tight_cycle) {
+    rep.true_tight_cycle = static_cast<int>(controller.twist_cycle);
+  }
+  rep.twist_cycles = std::max(rep.twist_cycles, static_cast<int>(controller.twist_cycle));
+  rep.final_cap_angle_deg = gt.cap_angle_deg;
+  if (!record_) return;
+  FrameSample s;
+  s.frame = frame;
+  s.t = t;
+  s.phase = static_cast<std::uint8_t>(controller.phase);
+  s.twist_cycle = controller.twist_cycle;
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    for (const ElementTruth& et : gt.fingertips[i].elements) {
+      s.max_fz_true[i] = std::max(s.max_fz_true[i], et.fz_n);
+      s.true_slip[i] = s.true_slip[i] || et.sliding;
+    }
+  }
+  s.fingertip_x_m = pose.fingertip_x_m;
+  s.wrist_z_m = pose.wrist_z_m;
+  s.wrist_yaw_rad = pose.wrist_yaw_rad;
+  s.cap_angle_deg = gt.cap_angle_deg;
+  s.cap_z_m = gt.object_position_m.z;
+  s.cap_yaw_rad = gt.cap_yaw_rad;
+  s.cap_place = static_cast<std::uint8_t>(gt.place);
+  run_.series.frames.push_back(s);
+}
+
+void RunScorer::add_measurement(std::size_t i, std::uint64_t frame,
+                                std::span<const ElementReading> readings,
+                                const FingertipTruth& truth, control::Phase phase) {
+  Report& rep = run_.report;
+  const bool twist = control::is_twist_phase(phase);
+  const double thr = flags_.dr(twist);
+  FrameSample* sample = record_ ? sample_for(frame) : nullptr;
+  const double t = sample != nullptr ? sample->t : 0.0;
+  Latest& latest = latest_[i];
+  latest.threshold_mm = thr;
+  double best = -1;
+  for (std::size_t k = 0; k < kElementsPerFingertip && k < readings.size(); ++k) {
+    const ElementReading& r = readings[k];
+    const ElementTruth& et = truth.elements[k];
+    latest.readings[k] = r;
+    latest.true_sliding[k] = et.sliding;
+    const double d = std::hypot(r.dx_mm, r.dy_mm);
+    const bool predicted = r.contact && r.has_displacement && d > thr;
+    slip_.add(i, k, frame, predicted, et, thr);
+    if (sample != nullptr) {
+      if (predicted && et.sliding) ++sample->tp[i];
+      if (predicted && !et.sliding) ++sample->fp[i];
+      if (!predicted && et.sliding) ++sample->fn[i];
+    }
+    if (record_ && predicted != et.sliding) {
+      run_.series.mismatches.push_back(
+          {t, static_cast<int>(i), static_cast<std::uint32_t>(k), predicted, d, r.fz, et});
+    }
+    if (et.visible || r.contact) {
+      const double en = (r.contact ? r.fz : 0.0) - et.fz_n;
+      const double ex = (r.contact ? r.fx : 0.0) - et.fx_n;
+      const double ey = (r.contact ? r.fy : 0.0) - et.fy_n;
+      sq_normal_[i] += en * en;
+      sq_shear_[i] += ex * ex + ey * ey;
+      ++n_normal_;
+      n_shear_ += 2;
+    }
+    if (r.contact) rep.max_fz_N = std::max(rep.max_fz_N, r.fz);
+    if (sample != nullptr) {
+      if (r.contact && r.has_displacement && d > best) {
+        best = d;
+        sample->dy_mm[i] = r.dy_mm;
+      }
+      sample->max_fz_measured[i] = std::max(sample->max_fz_measured[i], r.contact ? r.fz : 0.0);
+    }
+  }
+  if (sample != nullptr) {
+    // TOUCH, SLIP and OVER as the controller's FlagAnalyzer decides them from this frame.
+    control::FingertipInput in;
+    in.elements = readings;
+    in.fresh = true;
+    const control::FingertipFlags f = flags_.analyze(in, twist);
+    sample->touch[i] = f.touch;
+    sample->slip[i] = f.slip;
+    sample->over[i] = f.over;
+  }
+}
+
+void RunScorer::snapshot(double t, const char* label) {
+  auto& snapshots = run_.series.snapshots;
+  // One snapshot per moment: a later event of the same moment names it.
+  if (!snapshots.empty() && snapshots.back().t == t) snapshots.pop_back();
+  Snapshot snap;
+  snap.t = t;
+  snap.label = label;
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    const Latest& latest = latest_[i];
+    for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
+      const ElementReading& r = latest.readings[k];
+      auto& s = snap.fingertips[i][k];
+      s.x_px = run_.calibrations[i].elements[k].center_px.x;
+      s.y_px = run_.calibrations[i].elements[k].center_px.y;
+      s.contact = r.contact;
+      s.slip =
+          r.contact && r.has_displacement && std::hypot(r.dx_mm, r.dy_mm) > latest.threshold_mm;
+      s.true_sliding = latest.true_sliding[k];
+      s.ux_mm = r.ux_mm;
+      s.uy_mm = r.uy_mm;
+      s.dx_mm = r.dx_mm;
+      s.dy_mm = r.dy_mm;
+      s.fz_n = r.fz;
+    }
+  }
+  snapshots.push_back(std::move(snap));
+}
+
+void RunScorer::add_event(const control::Event& e, double t) {
+  Report& rep = run_.report;
+  const char* label = nullptr;
+  const auto classified = [&rep, &e](const char* as) {
+    if (e.phase == control::Phase::kLift && !rep.grasp_classified) rep.grasp_classified = as;
+    if (e.phase == control::Phase::kLower && !rep.release_classified) rep.release_classified = as;
+  };
+  switch (e.kind) {
+    case control::EventKind::kGraspClassified:
+      classified("grasp");
+      label = "grasp classified";
+      break;
+    case control::EventKind::kReleaseClassified:
+      classified("release");
+      label = "release classified";
+      break;
+    case control::EventKind::kRecompress:
+      ++rep.recompressions;
+      if (e.phase == control::Phase::kTransport && !transport_snapshot_) {
+        transport_snapshot_ = true;
+        label = "re-compression in transport";
+      }
+      break;
+    case control::EventKind::kOver:
+      ++rep.over_events;
+      break;
+    case control::EventKind::kCapTight:
+      if (!rep.tightened_cycle) rep.tightened_cycle = static_cast<int>(e.cycle);
+      label = "cap tight";
+      break;
+    case control::EventKind::kDone:
+      rep.completed = true;
+      break;
+    case control::EventKind::kAborted:
+      rep.end_reason = std::string("aborted: ") + e.text;
+      break;
+    default:
+      break;
+  }
+  rep.twist_cycles = std::max(rep.twist_cycles, static_cast<int>(e.cycle));
+  if (!record_) return;
+  EventRecord er;
+  er.t = t;
+  er.kind = static_cast<std::uint8_t>(e.kind);
+  er.kind_name = control::to_string(e.kind);
+  er.phase = control::to_string(e.phase);
+  er.cycle = e.cycle;
+  er.fingertip = e.fingertip;
+  er.value = e.value;
+  er.text = e.text;
+  run_.series.events.push_back(std::move(er));
+  if (label != nullptr) snapshot(t, label);
+}
+
+void RunScorer::finish(bool dropped, double sim_time_s, std::uint64_t frames) {
+  Report& rep = run_.report;
+  slip_.finish(rep.slip);
+  rep.dropped = dropped;
+  rep.frames = frames;
+  rep.sim_time_s = sim_time_s;
+  double sq_normal = 0;
+  double sq_shear = 0;
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    sq_normal += sq_normal_[i];
+    sq_shear += sq_shear_[i];
+  }
+  rep.force_rmse_normal_N =
+      n_normal_ > 0 ? std::sqrt(sq_normal / static_cast<double>(n_normal_)) : 0;
+  rep.force_rmse_shear_N = n_shear_ > 0 ? std::sqrt(sq_shear / static_cast<double>(n_shear_)) : 0;
+}
+
+}  // namespace tactile::rig

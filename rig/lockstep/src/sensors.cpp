@@ -1,0 +1,59 @@
+#include "tactile/rig/sensors.hpp"
+
+#include "tactile/config/calibration_file.hpp"
+
+namespace tactile::rig {
+namespace {
+
+// splitmix64: independent seeds for the noise pools and frame offsets from the scenario seed.
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+
+double visible_fz_n(const Calibration& cal) {
+  return cal.normal_curve(cal.contact_on);
+}
+
+}  // namespace
+
+std::array<Calibration, kFingertips> simulated_calibrations(const Scenario& sc,
+                                                            const CameraParams& camera,
+                                                            std::span<const Vec3> normals) {
+  std::array<Calibration, kFingertips> cals;
+  for (std::size_t i = 0; i < kFingertips; ++i)
+    cals[i] = make_calibration(kFingertipIds[i], camera, sc.optics, normals);
+  return cals;
+}
+
+std::vector<std::filesystem::path> save_calibrations(
+    const std::filesystem::path& dir, const std::array<Calibration, kFingertips>& calibrations) {
+  std::vector<std::filesystem::path> paths;
+  for (const Calibration& cal : calibrations) {
+    paths.push_back(dir / (cal.sensor_id + ".yaml"));
+    config::save_calibration(paths.back(), cal);
+  }
+  return paths;
+}
+
+SimulatedSensors::SimulatedSensors(const Scenario& sc, const CameraParams& camera,
+                                   std::span<const Vec3> normals)
+    : calibrations_(simulated_calibrations(sc, camera, normals)),
+      frame_rng_{util::Random(mix(sc.seed * 4 + 1)), util::Random(mix(sc.seed * 4 + 2))},
+      truth_(visible_fz_n(calibrations_[0]), sc.partial_slip_ratio) {
+  for (std::size_t i = 0; i < kFingertips; ++i)
+    renderers_.emplace_back(calibrations_[i], camera, sc.optics, mix(sc.seed * 4 + 3 + i * 7919));
+}
+
+const Image& SimulatedSensors::render(std::size_t i, const FingertipTruth& truth) {
+  for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
+    const ElementTruth& et = truth.elements[k];
+    loads_[k] = {et.fz_n, et.ux_mm, et.uy_mm};
+  }
+  renderers_[i].render(loads_, frame_rng_[i], images_[i]);
+  return images_[i];
+}
+
+}  // namespace tactile::rig

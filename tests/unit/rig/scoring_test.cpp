@@ -1,0 +1,240 @@
+// The one scorer of a rig run (docs/rig.md, "Scoring"): the lockstep runner feeds it each frame
+// whole and at once; the real-time rig feeds it the truth when it renders, the measured frames
+// and the events later, as they arrive over the wire. One recorded stream fed both ways gives the
+// same metrics.
+#include "tactile/rig/scoring.hpp"
+
+#include <gtest/gtest.h>
+
+#include <deque>
+#include <filesystem>
+#include <vector>
+
+#include "tactile/rig/sensors.hpp"
+#include "tactile/util/random.hpp"
+
+namespace tactile::rig {
+namespace {
+
+const std::filesystem::path kDir = TACTILE_RIG_SCENARIOS;
+
+// One frame of a recorded run: the truth, both fingertips' measured readings, the controller's
+// state when the frame was taken (`phase_taken`) and after it (`controller`), and its events.
+struct RecordedFrame {
+  double t = 0;
+  GroundTruth truth;
+  std::array<std::array<ElementReading, kElementsPerFingertip>, kFingertips> measured{};
+  control::Phase phase_taken = control::Phase::kIdle;
+  ControllerState controller;
+  FramePose pose;
+  std::vector<control::Event> events;
+};
+
+// A synthetic stream with the statistics that matter to the scorer: slip episodes per element
+// (a Markov chain), a measurement that mostly but not always agrees with them, forces near F1
+// and F2, a switch to Phase II (the threshold changes) and the events the report counts.
+std::vector<RecordedFrame> synthetic_stream(std::size_t frames) {
+  util::Random rng(20261125);
+  std::vector<RecordedFrame> stream(frames);
+  std::array<std::array<bool, kElementsPerFingertip>, kFingertips> sliding{};
+  for (std::size_t n = 0; n < frames; ++n) {
+    RecordedFrame& f = stream[n];
+    f.t = static_cast<double>(n + 1) / 100.0;
+    const bool twist = n >= frames / 2;
+    f.phase_taken = n < frames / 4 ? control::Phase::kLift
+                    : twist        ? control::Phase::kTwistTurn
+                                   : control::Phase::kTransport;
+    f.controller = {f.phase_taken,
+                    twist ? static_cast<std::uint32_t>(1 + (n - frames / 2) / 50) : 0U};
+    f.truth.sim_time_s = f.t;
+    f.truth.cap_angle_deg = static_cast<double>(n) * 0.5;
+    f.truth.cap_tight = n >= frames - 30;
+    for (std::size_t i = 0; i < kFingertips; ++i) {
+      f.pose.fingertip_x_m[i] = 0.01 * static_cast<double>(n) + 0.001 * static_cast<double>(i);
+      for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
+        ElementTruth& et = f.truth.fingertips[i].elements[k];
+        et.id = static_cast<std::uint32_t>(k);
+        et.visible = k < 12 || rng.uniform() < 0.1;
+        et.contact = et.visible;
+        et.fz_n = et.visible ? rng.uniform(0.05, 1.2) : 0.0;
+        et.fx_n = rng.uniform(-0.1, 0.1);
+        et.fy_n = rng.uniform(-0.1, 0.1);
+        et.ux_mm = rng.uniform(-0.2, 0.2);
+        et.uy_mm = rng.uniform(-0.2, 0.2);
+        const double flip = sliding[i][k] ? 0.3 : 0.05;
+        if (et.visible && rng.uniform() < flip) sliding[i][k] = !sliding[i][k];
+        if (!et.visible) sliding[i][k] = false;
+        et.sliding = sliding[i][k];
+        ElementReading& r = f.measured[i][k];
+        r.id = et.id;
+        r.contact = et.visible ? rng.uniform() < 0.95 : rng.uniform() < 0.03;
+        r.has_displacement = r.contact && rng.uniform() < 0.9;
+        const bool agree = rng.uniform() < 0.85;
+        const double d = (et.sliding == agree) ? rng.uniform(0.05, 0.2) : rng.uniform(0, 0.02);
+        r.dx_mm = d * 0.6;
+        r.dy_mm = -d * 0.8;
+        r.fz = et.fz_n + 0.01 * rng.normal();
+        r.fx = et.fx_n + 0.005 * rng.normal();
+        r.fy = et.fy_n + 0.005 * rng.normal();
+        r.ux_mm = et.ux_mm;
+        r.uy_mm = et.uy_mm;
+      }
+    }
+    const auto event = [&f](control::EventKind kind, std::uint32_t cycle, const char* text) {
+      control::Event e;
+      e.kind = kind;
+      e.phase = f.controller.phase;
+      e.cycle = cycle;
+      e.text = text;
+      f.events.push_back(e);
+    };
+    if (n == 20) event(control::EventKind::kGraspClassified, 0, "");
+    if (n == 21) event(control::EventKind::kRecompress, 0, "");
+    if (n == frames / 3) event(control::EventKind::kRecompress, 0, "");
+    if (n == frames - 25) event(control::EventKind::kCapTight, f.controller.twist_cycle, "");
+    if (n == frames - 5) event(control::EventKind::kDone, f.controller.twist_cycle, "");
+  }
+  return stream;
+}
+
+LockstepResult empty_run() {
+  LockstepResult run;
+  const Scenario sc = load_scenario(kDir / "default.yaml");
+  const World world(sc.world);
+  run.calibrations = simulated_calibrations(sc, sc.camera, world.element_normals());
+  return run;
+}
+
+// As run_lockstep does: frames counted from 1, each frame's truth, measurements and events at
+// once.
+LockstepResult score_as_lockstep(const std::vector<RecordedFrame>& stream,
+                                 const control::Config& cfg) {
+  LockstepResult run = empty_run();
+  RunScorer scorer(run, cfg, true);
+  std::uint64_t frame = 0;
+  for (const RecordedFrame& f : stream) {
+    ++frame;
+    scorer.add_truth(frame, f.t, f.truth, f.controller, f.pose);
+    for (std::size_t i = 0; i < kFingertips; ++i)
+      scorer.add_measurement(i, frame, f.measured[i], f.truth.fingertips[i], f.phase_taken);
+    for (const control::Event& e : f.events)
+      scorer.add_event(e, f.t);
+  }
+  scorer.finish(false, static_cast<double>(frame) / 100.0, frame);
+  return run;
+}
+
+// As run_realtime does: frames counted from 0; the truth when the frame is rendered; each
+// fingertip's measured frame some frames later (the right one sometimes first) and the events
+// after the measurements of their frame.
+LockstepResult score_as_realtime(const std::vector<RecordedFrame>& stream,
+                                 const control::Config& cfg) {
+  LockstepResult run = empty_run();
+  RunScorer scorer(run, cfg, true);
+  struct Arrival {
+    std::size_t index;
+    std::size_t fingertip;
+  };
+  std::deque<Arrival> in_flight;
+  std::vector<int> delivered(stream.size(), 0);
+  const auto deliver = [&](const Arrival& a) {
+    const RecordedFrame& f = stream[a.index];
+    scorer.add_measurement(a.fingertip, a.index, f.measured[a.fingertip],
+                           f.truth.fingertips[a.fingertip], f.phase_taken);
+    if (++delivered[a.index] == 2) {  // both fingertips of the frame are in: its events follow
+      for (const control::Event& e : f.events)
+        scorer.add_event(e, f.t + 0.004);
+    }
+  };
+  for (std::size_t n = 0; n < stream.size(); ++n) {
+    scorer.add_truth(n, stream[n].t, stream[n].truth, stream[n].controller, stream[n].pose);
+    const std::size_t first = n % 3 == 0 ? 1 : 0;
+    in_flight.push_back({n, first});
+    in_flight.push_back({n, 1 - first});
+    while (in_flight.size() > 6) {  // three frames in flight
+      deliver(in_flight.front());
+      in_flight.pop_front();
+    }
+  }
+  while (!in_flight.empty()) {
+    deliver(in_flight.front());
+    in_flight.pop_front();
+  }
+  scorer.finish(false, static_cast<double>(stream.size()) / 100.0, stream.size());
+  return run;
+}
+
+TEST(Scoring, LockstepAndRealTimeOrderGiveTheSameMetrics) {
+  const control::Config cfg;
+  const std::vector<RecordedFrame> stream = synthetic_stream(400);
+  const LockstepResult a = score_as_lockstep(stream, cfg);
+  const LockstepResult b = score_as_realtime(stream, cfg);
+  // The stream exercises what it should.
+  ASSERT_GT(a.report.slip.true_positives, 100U);
+  ASSERT_GT(a.report.slip.false_positives, 10U);
+  ASSERT_GT(a.report.slip.false_negatives, 10U);
+  ASSERT_GT(a.report.slip.onsets, 50U);
+  ASSERT_EQ(a.report.recompressions, 2);
+  ASSERT_TRUE(a.report.completed);
+  // Every metric of the report, as bytes.
+  EXPECT_EQ(report_json(a.report), report_json(b.report));
+  // And the series: per-frame scores, flags and Fig. 10's x.
+  ASSERT_EQ(a.series.frames.size(), b.series.frames.size());
+  for (std::size_t n = 0; n < a.series.frames.size(); ++n) {
+    const FrameSample& x = a.series.frames[n];
+    const FrameSample& y = b.series.frames[n];
+    EXPECT_EQ(x.tp, y.tp) << n;
+    EXPECT_EQ(x.fp, y.fp) << n;
+    EXPECT_EQ(x.fn, y.fn) << n;
+    EXPECT_EQ(x.touch, y.touch) << n;
+    EXPECT_EQ(x.slip, y.slip) << n;
+    EXPECT_EQ(x.over, y.over) << n;
+    EXPECT_EQ(x.dy_mm, y.dy_mm) << n;
+    EXPECT_EQ(x.max_fz_measured, y.max_fz_measured) << n;
+    EXPECT_EQ(x.fingertip_x_m, y.fingertip_x_m) << n;
+  }
+  EXPECT_EQ(a.series.mismatches.size(), b.series.mismatches.size());
+  EXPECT_EQ(a.series.events.size(), b.series.events.size());
+}
+
+// TOUCH, SLIP and OVER in the series are the control core's own flags (FlagAnalyzer) of the
+// measured frame: TOUCH for F_z above F1 or a slip, OVER above F2.
+TEST(Scoring, SeriesFlagsAreTheControllersFlags) {
+  control::Config cfg;
+  LockstepResult run = empty_run();
+  RunScorer scorer(run, cfg, true);
+  GroundTruth gt;
+  scorer.add_truth(1, 0.01, gt, {control::Phase::kLift, 0}, {});
+  std::array<ElementReading, kElementsPerFingertip> left{}, right{};
+  left[0].contact = true;
+  left[0].fz = cfg.f2_n + 0.1;  // over F2, so over F1 too
+  right[3].contact = true;
+  right[3].has_displacement = true;
+  right[3].fz = 0.5 * cfg.f1_n;  // below F1, but slipping: TOUCH
+  right[3].dy_mm = 2 * cfg.dr_mm;
+  scorer.add_measurement(0, 1, left, gt.fingertips[0], control::Phase::kLift);
+  scorer.add_measurement(1, 1, right, gt.fingertips[1], control::Phase::kLift);
+  const FrameSample& s = run.series.frames.at(0);
+  EXPECT_TRUE(s.touch[0]);
+  EXPECT_TRUE(s.over[0]);
+  EXPECT_FALSE(s.slip[0]);
+  EXPECT_TRUE(s.touch[1]);
+  EXPECT_TRUE(s.slip[1]);
+  EXPECT_FALSE(s.over[1]);
+}
+
+// Fig. 10's x is the apex's position along the transport, from the cap's place to the bottle.
+TEST(Scoring, FigTenXIsAlongTheTransport) {
+  WorldParams w;
+  w.cap.x_m = 0.35;
+  w.cap.y_m = -0.10;
+  w.bottle.x_m = 0.35;
+  w.bottle.y_m = 0.10;
+  const Vec3 d = transport_direction(w);
+  EXPECT_NEAR(d.x, 0.0, 1e-12);
+  EXPECT_NEAR(d.y, 1.0, 1e-12);
+  EXPECT_EQ(d.z, 0.0);
+}
+
+}  // namespace
+}  // namespace tactile::rig
