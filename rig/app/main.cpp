@@ -139,8 +139,8 @@ int run(int argc, char** argv) {
   }
   if (!observe_key.empty()) {
     // sensor_node's PUB lets in any client that knows its public key: the rig's own pair is new.
-    rt.observe_security = tactile::wire::ClientSecurity{tactile::wire::generate_keypair(),
-                                                        tactile::wire::load_public_key(observe_key)};
+    rt.observe_security = tactile::wire::ClientSecurity{
+        tactile::wire::generate_keypair(), tactile::wire::load_public_key(observe_key)};
   }
   if (!write_configs.empty()) {
     tactile::rig::write_node_configs(scenario, write_configs, rt);

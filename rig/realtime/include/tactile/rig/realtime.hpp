@@ -53,7 +53,7 @@ struct RealtimeOptions {
 
 struct RealtimeCounters {
   std::uint64_t frames_rendered = 0;
-  std::uint64_t late_renders = 0;      // a frame rendered after its send instant
+  std::uint64_t late_renders = 0;  // a frame rendered after its send instant
   // Images published after their send instant: the cameras had already sent the previous image
   // again, with its old timestamp, so that frame's latency is a period longer.
   std::uint64_t late_publishes = 0;
