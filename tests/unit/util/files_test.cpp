@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <string>
 
+#include "process.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -14,16 +16,10 @@ using tactile::util::check_writable_dir;
 
 class WritableDir : public ::testing::Test {
  protected:
-  void SetUp() override {
-    std::string t = (fs::temp_directory_path() / "files_test.XXXXXX").string();
-    ASSERT_NE(::mkdtemp(t.data()), nullptr);
-    dir_ = t;
-  }
-  void TearDown() override {
-    ::chmod(dir_.c_str(), 0755);
-    fs::remove_all(dir_);
-  }
-  fs::path dir_;
+  // The read-only case takes the write bit away: give it back so the folder can be removed.
+  void TearDown() override { ::chmod(dir_.c_str(), 0755); }
+  tactile::testing::TempDir tmp_;
+  const fs::path& dir_ = tmp_.path();
 };
 
 TEST_F(WritableDir, CreatesAMissingFolderAndLeavesNoProbeBehind) {
