@@ -4,9 +4,10 @@ tactile.v1.LogRecord messages."""
 from dataclasses import dataclass
 from typing import Iterator, Optional
 
-import zstandard
+from ._deps import require
+from .messages import Message, decode_message, log_pb2
 
-from .messages import Message, decode, log_pb2
+zstandard = require("zstandard")
 
 LOG_FORMAT = "tactile-log/1"
 _CHUNK = 1 << 20
@@ -20,9 +21,17 @@ class LogRecord:
     kind: int  # log_pb2.PAYLOAD_KIND_ENVELOPE or PAYLOAD_KIND_RAW_FRAME
     payload: bytes
 
-    def decode(self) -> Optional[Message]:
-        """The record's message as a Protobuf object (None when it does not decode)."""
-        m = decode(self.topic, self.payload)
+    def decode(self):
+        """The record's message as a Protobuf object: the TactileFrame, Event, SensorStats,
+        GroundTruth... its Envelope carries, or a RawFrame for a raw/ topic; None when it does not
+        decode. ``message()`` gives the same object with its kind."""
+        m = self.message()
+        return None if m is None else m.body
+
+    def message(self) -> Optional[Message]:
+        """The record as a Message (topic, kind, body = what decode() returns, payload, receive
+        time, source); None when it does not decode."""
+        m = decode_message(self.topic, self.payload)
         if m is not None:
             m.receive_time_ns = self.receive_time_ns
             m.source = self.source
@@ -58,6 +67,13 @@ class LogReader:
         self.problem = ""
         self.records = 0
         self._file = open(self.path, "rb")
+        try:
+            self._open()
+        except BaseException:
+            self._file.close()
+            raise
+
+    def _open(self):
         head = self._file.read(4)
         if not head:
             raise ValueError(f"{self.path}: empty file (the recorder stopped before writing anything)")

@@ -3,6 +3,10 @@
 from dataclasses import dataclass
 from typing import Any, Optional
 
+from ._deps import require
+
+require("google.protobuf")  # first, so that its absence is not reported as a build problem
+
 try:
     from tactile.v1 import tactile_pb2, log_pb2  # generated at build time
 except ImportError as e:  # pragma: no cover - a set-up error, said clearly
@@ -42,7 +46,7 @@ def decode_envelope(payload: bytes):
     return kind, getattr(env, kind)
 
 
-def decode(topic: str, payload: bytes) -> Optional[Message]:
+def decode_message(topic: str, payload: bytes) -> Optional[Message]:
     """A message by its topic: raw frames (topic raw/...) are RawFrames, the rest Envelopes."""
     if topic.startswith("raw/"):
         raw = log_pb2.RawFrame()

@@ -3,9 +3,10 @@
 import time
 from typing import Iterable, Iterator, List, Optional
 
-import zmq
+from ._deps import require
+from .messages import Message, decode_message
 
-from .messages import Message, decode
+zmq = require("zmq")
 
 DEFAULT_TOPICS = ("frame/", "event")
 
@@ -92,7 +93,7 @@ class Subscriber:
             if len(parts) != 2:
                 self.undecodable += 1
                 continue
-            m = decode(parts[0].decode("utf-8", "replace"), parts[1])
+            m = decode_message(parts[0].decode("utf-8", "replace"), parts[1])
             if m is None:
                 self.undecodable += 1
                 continue
