@@ -22,43 +22,72 @@ std::string read_file(const std::filesystem::path& path) {
 }
 
 void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
-  const auto parent = path.parent_path();
+  AtomicFileWriter file(path);
+  file.write(content);
+  file.commit();
+}
+
+AtomicFileWriter::AtomicFileWriter(std::filesystem::path path) : path_(std::move(path)) {
+  const auto parent = path_.parent_path();
   if (!parent.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(parent, ec);
     if (ec)
       throw std::runtime_error(parent.string() + ": cannot create directory: " + ec.message());
   }
-  std::string tmp = path.string() + ".tmp.XXXXXX";
-  const int fd = ::mkstemp(tmp.data());
-  if (fd < 0)
-    throw std::runtime_error(path.string() +
+  tmp_ = path_.string() + ".tmp.XXXXXX";
+  fd_ = ::mkstemp(tmp_.data());
+  if (fd_ < 0)
+    throw std::runtime_error(path_.string() +
                              ": cannot create a temporary file: " + std::strerror(errno));
-  const char* p = content.data();
-  std::size_t left = content.size();
+  // mkstemp makes the file 0600; data files are readable by others as usual.
+  ::fchmod(fd_, 0644);
+}
+
+AtomicFileWriter::~AtomicFileWriter() {
+  if (fd_ >= 0) {
+    ::close(fd_);
+    ::unlink(tmp_.c_str());
+  }
+}
+
+void AtomicFileWriter::fail(const std::string& what) {
+  const std::string why = std::strerror(errno);
+  ::close(fd_);
+  ::unlink(tmp_.c_str());
+  fd_ = -1;
+  throw std::runtime_error(path_.string() + ": " + what + ": " + why);
+}
+
+void AtomicFileWriter::write(std::string_view bytes) {
+  if (fd_ < 0) throw std::runtime_error(path_.string() + ": write after the file was closed");
+  const char* p = bytes.data();
+  std::size_t left = bytes.size();
   while (left > 0) {
-    const ssize_t n = ::write(fd, p, left);
+    const ssize_t n = ::write(fd_, p, left);
     if (n < 0) {
       if (errno == EINTR) continue;
-      const std::string why = std::strerror(errno);
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      throw std::runtime_error(path.string() + ": write failed: " + why);
+      fail("write failed");
     }
     p += n;
     left -= static_cast<std::size_t>(n);
   }
-  // mkstemp makes the file 0600; data files are readable by others as usual.
-  ::fchmod(fd, 0644);
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+}
+
+void AtomicFileWriter::commit() {
+  if (fd_ < 0) throw std::runtime_error(path_.string() + ": commit after the file was closed");
+  if (::fsync(fd_) != 0) fail("flush failed");
+  if (::close(fd_) != 0) {
+    fd_ = -1;
     const std::string why = std::strerror(errno);
-    ::unlink(tmp.c_str());
-    throw std::runtime_error(path.string() + ": flush failed: " + why);
+    ::unlink(tmp_.c_str());
+    throw std::runtime_error(path_.string() + ": flush failed: " + why);
   }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+  fd_ = -1;
+  if (::rename(tmp_.c_str(), path_.c_str()) != 0) {
     const std::string why = std::strerror(errno);
-    ::unlink(tmp.c_str());
-    throw std::runtime_error(path.string() + ": rename failed: " + why);
+    ::unlink(tmp_.c_str());
+    throw std::runtime_error(path_.string() + ": rename failed: " + why);
   }
 }
 

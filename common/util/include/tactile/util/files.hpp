@@ -14,6 +14,29 @@ std::string read_file(const std::filesystem::path& path);
 // parent directories. Throws std::runtime_error naming the file on failure.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
 
+// A file written in pieces that appears whole or not at all: the pieces go to a temporary file
+// beside `path` (missing parent directories are created); commit() flushes it to disk and renames
+// it over `path`. Destroyed without commit() (an error, a stop), it removes the temporary file and
+// leaves `path` as it was. Every failure throws std::runtime_error naming `path`.
+class AtomicFileWriter {
+ public:
+  explicit AtomicFileWriter(std::filesystem::path path);
+  ~AtomicFileWriter();
+  AtomicFileWriter(const AtomicFileWriter&) = delete;
+  AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+
+  void write(std::string_view bytes);
+  void commit();
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  void fail(const std::string& what);
+
+  std::filesystem::path path_;
+  std::string tmp_;
+  int fd_ = -1;
+};
+
 // Makes sure files can be written into `dir` later: creates it when missing and creates and
 // removes a probe file in it. For a program that writes its results only at the end of a long
 // run, so that a folder it cannot write is an error at start-up, not a result lost at the end.
