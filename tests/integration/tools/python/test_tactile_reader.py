@@ -4,11 +4,10 @@ subscriber, which must see every TactileFrame and Event byte for byte. The comma
 pipe, usage errors, an interpreter without Debian's modules, a subscriber that hears nothing.
 
 Run by ctest with PYTHONPATH=BUILD/tools/python and the programs' paths in TACTILE_RECORD,
-TACTILE_REPLAY and TACTILE_FAKE_SENSOR."""
+TACTILE_REPLAY and TACTILE_FAKE_SENSOR (fake_run.py records the run)."""
 
 import importlib
 import os
-import re
 import shutil
 import signal
 import socket
@@ -18,26 +17,16 @@ import tempfile
 import time
 import unittest
 
+import fake_run
 import tactile_reader
 from tactile_reader import LogReader, Subscriber, read_log
 from tactile_reader.messages import log_pb2, tactile_pb2
 
-RECORD = os.environ["TACTILE_RECORD"]
 REPLAY = os.environ["TACTILE_REPLAY"]
-FAKE = os.environ["TACTILE_FAKE_SENSOR"]
-FRAMES = 40
-# What fake_sensor sends with --raw --events: frames, raw frames and references, events.
-EXPECTED = FRAMES + (FRAMES + 1 + FRAMES // 25) + sum(1 for k in range(FRAMES) if k % 10 == 5)
-
-
-def wait_for(pattern, read, timeout=20.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        m = re.search(pattern, read())
-        if m:
-            return m
-        time.sleep(0.005)
-    raise AssertionError(f"no match for {pattern!r} in {read()!r}")
+FRAMES = fake_run.FRAMES
+EXPECTED = fake_run.EXPECTED
+read_text = fake_run.read_text
+wait_for = fake_run.wait_for
 
 
 class TactileReaderTest(unittest.TestCase):
@@ -45,20 +34,7 @@ class TactileReaderTest(unittest.TestCase):
     def setUpClass(cls):
         cls.dir = tempfile.mkdtemp(prefix="tactile-py-")
         cls.log = os.path.join(cls.dir, "run.tlog")
-        out = os.path.join(cls.dir, "fake.out")
-        with open(out, "w") as f:
-            sensor = subprocess.Popen(
-                [FAKE, "--calibration", os.path.join(cls.dir, "left.yaml"), "--frames", str(FRAMES),
-                 "--raw", "--events", "--wait-subscriptions", "5"],
-                stdout=f, stderr=subprocess.DEVNULL)
-        try:
-            m = wait_for(r"frames=(\S+) events=(\S+)", lambda: read_text(out))
-            rec = subprocess.run(
-                [RECORD, "-o", cls.log, m.group(1), m.group(2), "--raw-frames", "--count",
-                 str(EXPECTED)], capture_output=True, text=True, timeout=60)
-            assert rec.returncode == 0, rec.stderr
-        finally:
-            sensor.wait(timeout=20)
+        fake_run.record(cls.dir, cls.log)
 
     @classmethod
     def tearDownClass(cls):
@@ -249,11 +225,6 @@ class TactileReaderTest(unittest.TestCase):
             if replay.poll() is None:
                 replay.kill()
                 replay.wait()
-
-
-def read_text(path):
-    with open(path) as f:
-        return f.read()
 
 
 def run_reader(args):
