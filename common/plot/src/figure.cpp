@@ -591,7 +591,9 @@ void draw_series(cv::Mat& img, const PanelLayout& l, const Series& s, std::vecto
       const TextBox b = measure(s.texts[0], kTickFont);
       const int x1 = l.right - 4;
       const int yb = static_cast<int>(py) - 3;
-      taken.push_back({x1 - b.w - 1, yb - b.h - 1, x1 + 1, yb + b.base + 1});
+      const Box box{x1 - b.w - 2, yb - b.h - 2, x1 + 2, yb + b.base + 1};
+      taken.push_back(box);
+      cv::rectangle(img, {box.x0, box.y0}, {box.x1, box.y1}, bgr(kWhite), cv::FILLED);
       text_at(img, s.texts[0], x1, py - 3, 1, 1, kTickFont, s.color);
       break;
     }
@@ -1080,7 +1082,12 @@ Panel& Panel::histogram(std::span<const double> values, int bins, RobustRange ra
                         std::string label, Style style) {
   const auto r = robust_range(values, range);
   if (!r) return histogram(values, bins, std::move(label), style);
-  return histogram(values, bins, std::move(label), style, r->first, r->second);
+  // The margin widens the range towards the outliers, not below the smallest value or above the
+  // largest: no empty bins beyond the data.
+  const auto all = robust_range(values, RobustRange{0, 1, 0});
+  const double lo = std::max(r->first, all->first);
+  const double hi = std::min(r->second, all->second);
+  return histogram(values, bins, std::move(label), style, lo, std::max(hi, lo));
 }
 
 Panel& Panel::arrows(std::span<const double> x, std::span<const double> y,

@@ -155,8 +155,9 @@ class Panel {
   Panel& histogram(std::span<const double> values, int bins, std::string label = {},
                    Style style = {}, std::optional<double> lo = std::nullopt,
                    std::optional<double> hi = std::nullopt);
-  // The same over the robust range of the values (latencies with a rare long pause): what lies
-  // outside is counted, not binned, and the count is written at that edge of the axis.
+  // The same over the robust range of the values (latencies with a rare long pause), kept within
+  // the smallest and largest value: what lies outside is counted, not binned, and the count is
+  // written at that edge of the axis.
   Panel& histogram(std::span<const double> values, int bins, RobustRange range,
                    std::string label = {}, Style style = {});
   // Arrows from (x, y) to (x + s dx, y + s dy), s = style.arrow_scale (a quiver plot).
