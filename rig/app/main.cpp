@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <string>
 
+#include "tactile/rig/control_link.hpp"
 #include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/plots.hpp"
 #include "tactile/rig/realtime.hpp"
@@ -174,8 +175,13 @@ int run(int argc, char** argv) {
       tactile::util::write_file_atomic(series_path, tactile::rig::series_csv(result.run.series));
     }
     if (!plots_dir.empty()) {
-      for (const auto& path : tactile::rig::write_plots(result.run, plots_dir)) {
+      const auto controller = tactile::rig::scenario_controller_config(scenario);
+      for (const auto& path : tactile::rig::write_plots(result.run, controller, plots_dir)) {
         tactile::util::log_info("wrote {}", path.string());
+      }
+      if (!result.latency_ms.empty()) {
+        tactile::util::log_info(
+            "wrote {}", tactile::rig::write_latency_plot(result.latency_ms, plots_dir).string());
       }
     }
     return 0;
@@ -221,7 +227,8 @@ int run(int argc, char** argv) {
     tactile::util::write_file_atomic(mismatch_path, tactile::rig::mismatches_csv(result.series));
   }
   if (!plots_dir.empty()) {
-    for (const auto& path : tactile::rig::write_plots(result, plots_dir))
+    const auto controller = tactile::rig::scenario_controller_config(scenario);
+    for (const auto& path : tactile::rig::write_plots(result, controller, plots_dir))
       tactile::util::log_info("wrote {}", path.string());
   }
   return 0;

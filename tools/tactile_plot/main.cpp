@@ -1,6 +1,8 @@
 // tactile_plot: figures from a tactile log as PNG files (docs/tools.md): the paper's Fig. 3
 // (shear vector field) and Fig. 10 (y centroid change against fingertip x), per-element force
 // maps, flag and event timelines, latency histograms.
+#include <fmt/format.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <set>
@@ -106,6 +108,16 @@ int run(const Options& opt) {
     throw std::runtime_error(opt.log + ": no TactileFrames (topic frame/<sensor_id>)" +
                              (opt.sensors.empty() ? std::string() : " of the sensors asked for") +
                              " to plot");
+  }
+  // A time past the recording would draw its last frame as if asked for: refuse it.
+  if (const auto range = data.frame_time_range()) {
+    for (const double t : opt.at) {
+      if (t > range->second) {
+        throw std::invalid_argument(fmt::format(
+            "--at {:g}: past the end of {}, whose frames span {:.3f} to {:.3f} s from its start", t,
+            opt.log, range->first, range->second));
+      }
+    }
   }
   std::vector<std::filesystem::path> written;
   auto add = [&](std::vector<std::filesystem::path> files) {

@@ -7,6 +7,7 @@
 
 #include "tactile/control/types.hpp"
 #include "tactile/plot/figure.hpp"
+#include "tactile/plot/task_figures.hpp"
 #include "tactile/wire/envelope.hpp"
 
 namespace tactile::plots {
@@ -71,9 +72,11 @@ SensorData* PlotData::sensor(const std::string& id) {
 std::string PlotData::position_source_text() const {
   switch (source_) {
     case PositionSource::kArmState:
-      return "ArmState: wrist x + the fingertip's position rotated by the wrist yaw (world x)";
+      return "ArmState: wrist + the fingertip's position rotated by the wrist yaw, along the "
+             "transport (first to last touch)";
     case PositionSource::kGroundTruth:
-      return "GroundTruth object_position_m.x: the cap held between the fingertips (world x)";
+      return "GroundTruth object_position_m: the cap held between the fingertips, along the "
+             "transport (first to last touch)";
     case PositionSource::kNone:
       break;
   }
@@ -92,13 +95,14 @@ void PlotData::add(const v1::LogRecord& record) {
     case v1::Envelope::kEvent: {
       const v1::Event& e = envelope_.event();
       if (e.kind() == v1::EVENT_KIND_PHASE) twist_phase_ = twist_phase_named(e.phase());
-      events_.push_back({t, event_name(e.kind()), e.text()});
+      events_.push_back({t, event_name(e.kind()), e.text(), e.cycle()});
       break;
     }
     case v1::Envelope::kGroundTruth:
       if (source_ != PositionSource::kArmState) {
         source_ = PositionSource::kGroundTruth;
         truth_x_mm_ = envelope_.ground_truth().object_position_m().x() * 1000.0;
+        truth_y_mm_ = envelope_.ground_truth().object_position_m().y() * 1000.0;
       }
       break;
     case v1::Envelope::kArmState: {
@@ -107,8 +111,10 @@ void PlotData::add(const v1::LogRecord& record) {
       const double c = std::cos(a.wrist().yaw_rad());
       const double s = std::sin(a.wrist().yaw_rad());
       for (const auto& f : a.fingertips()) {
-        arm_x_mm_[f.sensor_id()] =
-            (a.wrist().position_m().x() + c * f.position_m().x() - s * f.position_m().y()) * 1000.0;
+        arm_xy_mm_[f.sensor_id()] = {
+            (a.wrist().position_m().x() + c * f.position_m().x() - s * f.position_m().y()) * 1000.0,
+            (a.wrist().position_m().y() + s * f.position_m().x() + c * f.position_m().y()) *
+                1000.0};
       }
       break;
     }
@@ -175,10 +181,19 @@ void PlotData::on_frame(const v1::TactileFrame& f, double t, std::int64_t receiv
   x.max_slip_mm = fl.max_slip_mm;
   x.dy_mm = dy_of_max;
   if (source_ == PositionSource::kArmState) {
-    const auto it = arm_x_mm_.find(f.sensor_id());
-    if (it != arm_x_mm_.end()) x.x_mm = it->second;
+    const auto it = arm_xy_mm_.find(f.sensor_id());
+    if (it != arm_xy_mm_.end()) {
+      x.world_x_mm = it->second.first;
+      x.world_y_mm = it->second.second;
+    }
   } else if (source_ == PositionSource::kGroundTruth) {
-    x.x_mm = truth_x_mm_;
+    x.world_x_mm = truth_x_mm_;
+    x.world_y_mm = truth_y_mm_;
+  }
+  if (s->element_ids.size() != static_cast<std::size_t>(f.elements_size())) {
+    s->element_ids.clear();
+    for (const auto& e : f.elements())
+      s->element_ids.push_back(e.id());
   }
   s->frames.push_back(x);
   snapshot(*s, f, t);
@@ -204,12 +219,46 @@ void PlotData::snapshot(SensorData& s, const v1::TactileFrame& f, double t) {
 
 void PlotData::finish() {
   for (auto& s : sensors_) {
+    // The transport: from where this fingertip first touched (the cap's place) to where it last
+    // touched (the bottle), horizontally; Fig. 10's x is the position along it (the rig's
+    // definition, docs/rig.md "Scoring").
+    const FrameSample* first = nullptr;
+    const FrameSample* last = nullptr;
+    for (const FrameSample& f : s.frames) {
+      if (!f.touch || std::isnan(f.world_x_mm)) continue;
+      if (first == nullptr) first = &f;
+      last = &f;
+    }
+    if (first != nullptr) {
+      const double dx = last->world_x_mm - first->world_x_mm;
+      const double dy = last->world_y_mm - first->world_y_mm;
+      const double n = std::hypot(dx, dy);
+      if (n >= 1.0) {
+        s.transport_x = dx / n;
+        s.transport_y = dy / n;
+        s.transport_known = true;
+      }
+    }
+    for (FrameSample& f : s.frames)
+      f.x_mm = f.world_x_mm * s.transport_x + f.world_y_mm * s.transport_y;
     for (const auto& [id, sum] : s.centroid_sum) {
       if (s.positions.count(id) != 0) continue;
       const double n = s.centroid_count[id];
       s.positions[id] = {sum.first / n, sum.second / n};
     }
   }
+}
+
+std::optional<std::pair<double, double>> PlotData::frame_time_range() const {
+  std::optional<std::pair<double, double>> r;
+  for (const auto& s : sensors_) {
+    for (const auto& f : s.frames) {
+      if (!r) r = std::pair{f.t_s, f.t_s};
+      r->first = std::min(r->first, f.t_s);
+      r->second = std::max(r->second, f.t_s);
+    }
+  }
+  return r;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -240,7 +289,9 @@ std::string snapshot_title(const Snapshot& snap) {
 }
 
 // Element positions drawn with -y up, so the picture looks like the camera image.
-void element_dots(plot::Panel& p, const SensorData& s, const Snapshot& snap) {
+// Returns how many elements of the frames could not be placed (never in contact and no
+// --calibration), for the panel's title.
+std::size_t element_dots(plot::Panel& p, const SensorData& s, const Snapshot& snap) {
   std::vector<double> ox, oy, cx, cy;
   for (const auto& [id, pos] : s.positions) {
     bool contact = false;
@@ -258,6 +309,14 @@ void element_dots(plot::Panel& p, const SensorData& s, const Snapshot& snap) {
   black.color = plot::kBlack;
   black.marker_radius = 3;
   p.scatter(cx, cy, "in contact", black);
+  return static_cast<std::size_t>(
+      std::count_if(s.element_ids.begin(), s.element_ids.end(),
+                    [&](std::uint32_t id) { return s.positions.count(id) == 0; }));
+}
+
+std::string unplaced_text(std::size_t n) {
+  if (n == 0) return {};
+  return fmt::format("; {} never in contact, not placed (give --calibration)", n);
 }
 
 }  // namespace
@@ -278,11 +337,10 @@ std::vector<std::filesystem::path> draw_shear_fields(const PlotData& d,
     const double scale = umax > 0 ? 0.8 * spacing(s) / umax : 1.0;
     for (const auto& snap : s.snapshots) {
       auto& p = fig.add_panel();
-      p.title(fmt::format("{}; arrows: u (mm) x {:.3g}", snapshot_title(snap), scale))
-          .x_label("x [mm]")
-          .y_label("-y [mm] (up in the image)")
-          .equal_aspect();
-      element_dots(p, s, snap);
+      p.x_label("x [mm]").y_label("-y [mm] (up in the image)").equal_aspect();
+      const std::size_t unplaced = element_dots(p, s, snap);
+      p.title(fmt::format("{}; arrows: u (mm) x {:.3g}{}", snapshot_title(snap), scale,
+                          unplaced_text(unplaced)));
       std::vector<double> x, y, u, v;
       for (const auto& e : snap.elements) {
         if (!e.contact) continue;
@@ -364,89 +422,63 @@ std::vector<std::filesystem::path> draw_force_maps(const PlotData& d,
   return out;
 }
 
+namespace {
+
+// The recording as the task figures take it (the same figures the rig draws of its runs).
+plot::TaskFigureInput task_input(const PlotData& d) {
+  plot::TaskFigureInput in;
+  const control::Config& cfg = d.options().control;
+  in.f1_n = cfg.f1_n;
+  in.f2_n = cfg.f2_n;
+  in.dr_mm = cfg.dr_mm;
+  in.twist_dr_factor = cfg.twist_dr_factor;
+  switch (d.position_source()) {
+    case PositionSource::kArmState:
+      in.x_source = "from ArmState";
+      break;
+    case PositionSource::kGroundTruth:
+      in.x_source = "from GroundTruth, the held cap";
+      break;
+    case PositionSource::kNone:
+      in.x_is_time = true;
+      break;
+  }
+  for (const auto& s : d.sensors()) {
+    if (d.position_source() != PositionSource::kNone && !s.transport_known)
+      in.x_source += "; world x: no transport seen";
+    plot::FingertipTrace f;
+    f.name = s.id;
+    for (const auto& x : s.frames) {
+      f.t_s.push_back(x.t_s);
+      f.x_mm.push_back(in.x_is_time ? x.t_s : x.x_mm);
+      f.dy_mm.push_back(x.dy_mm);
+      f.max_fz_n.push_back(x.max_fz_n);
+      f.touch.push_back(x.touch ? 1 : 0);
+      f.slip.push_back(x.slip ? 1 : 0);
+      f.over.push_back(x.over ? 1 : 0);
+    }
+    in.fingertips.push_back(std::move(f));
+  }
+  for (const auto& e : d.events()) {
+    if (auto text = plot::task_event_label(e.kind, e.cycle)) in.events.push_back({e.t_s, *text});
+  }
+  return in;
+}
+
+}  // namespace
+
 std::vector<std::filesystem::path> draw_fig10(const PlotData& d, const std::filesystem::path& dir) {
   if (d.sensors().empty()) return {};
-  const bool have_x = d.position_source() != PositionSource::kNone;
-  plot::Figure fig(d.options().width, d.options().height);
-  fig.title("y-directional centroid change against x-directional fingertip position (Fig. 10)");
-  const double dr = d.options().control.dr_mm;
-  for (const auto& s : d.sensors()) {
-    auto& p = fig.add_panel();
-    std::vector<double> x, y;
-    for (const auto& f : s.frames) {
-      const double xv = have_x ? f.x_mm : f.t_s;
-      if (std::isnan(xv)) continue;
-      x.push_back(xv);
-      y.push_back(f.dy_mm);
-    }
-    p.title(fmt::format("fingertip {}: dy of {}", s.id,
-                        d.options().element ? fmt::format("element {}", *d.options().element)
-                                            : std::string("the element moving most")))
-        .x_label(have_x ? fmt::format("fingertip x [mm] from {}",
-                                      d.position_source() == PositionSource::kArmState
-                                          ? "ArmState"
-                                          : "GroundTruth (the held cap)")
-                        : std::string("time [s] (no fingertip position in the log)"))
-        .y_label("dy_G [mm/frame]");
-    p.line(x, y, "dy");
-    plot::Style dash;
-    dash.dashed = true;
-    dash.color = plot::kGray;
-    p.hline(dr, "+dr", dash);
-    p.hline(-dr, "-dr", dash);
-  }
   const auto path = dir / "fig10.png";
-  fig.save_png(path);
+  plot::fig10(task_input(d), d.options().width, d.options().height).save_png(path);
   return {path};
 }
 
 std::vector<std::filesystem::path> draw_timeline(const PlotData& d,
                                                  const std::filesystem::path& dir) {
   if (d.sensors().empty()) return {};
-  plot::Figure fig(d.options().width, d.options().height);
-  fig.title("Forces, slip, flags and events").share_x();
-  auto& forces = fig.add_panel();
-  auto& slips = fig.add_panel();
-  auto& flags = fig.add_panel(0.8);
-  forces.y_label("max F_z [N]");
-  slips.y_label("max |d| [mm/frame]");
-  flags.y_label("flags").x_label("time [s] from the log's start");
-  const double f1 = d.options().control.f1_n;
-  const double f2 = d.options().control.f2_n;
-  double row = 0;
-  for (const auto& s : d.sensors()) {
-    std::vector<double> t, fz, sl, touch, slip, over;
-    for (const auto& f : s.frames) {
-      t.push_back(f.t_s);
-      fz.push_back(f.max_fz_n);
-      sl.push_back(f.max_slip_mm);
-      touch.push_back(row + 2.0 + (f.touch ? 0.7 : 0.0));
-      slip.push_back(row + 1.0 + (f.slip ? 0.7 : 0.0));
-      over.push_back(row + (f.over ? 0.7 : 0.0));
-    }
-    forces.line(t, fz, s.id);
-    slips.line(t, sl, s.id);
-    flags.step(t, touch, s.id + " TOUCH");
-    flags.step(t, slip, s.id + " SLIP");
-    flags.step(t, over, s.id + " OVER");
-    row += 3.5;
-  }
-  plot::Style dash;
-  dash.dashed = true;
-  dash.color = plot::kGray;
-  forces.hline(f1, "F1", dash).hline(f2, "F2", dash);
-  slips.hline(d.options().control.dr_mm, "dr", dash);
-  std::size_t marks = 0;
-  for (const auto& e : d.events()) {
-    if (e.kind == "RECOMPRESS" && marks > 10) continue;  // keep the picture readable
-    if (++marks > 40) break;
-    plot::Style st;
-    st.color = plot::kGray;
-    st.line_width = 1;
-    fig.mark(e.t_s, e.kind, st);
-  }
   const auto path = dir / "timeline.png";
-  fig.save_png(path);
+  plot::timeline(task_input(d), d.options().width, d.options().height).save_png(path);
   return {path};
 }
 
@@ -470,9 +502,11 @@ std::vector<std::filesystem::path> draw_latency(const PlotData& d,
       if (!std::isnan(f.publish_to_record_ms)) c.push_back(f.publish_to_record_ms);
     }
     any_camera = any_camera || !a.empty();
-    cam.histogram(a, 40, s.id);
-    pub.histogram(b, 40, s.id);
-    net.histogram(c, 40, s.id);
+    // The bulk of each: a pause of the machine is counted at the edge, not binned.
+    const plot::RobustRange bulk{0.0, 0.95, 0.5};
+    cam.histogram(a, 40, bulk, s.id);
+    pub.histogram(b, 40, bulk, s.id);
+    net.histogram(c, 40, bulk, s.id);
   }
   if (!any_camera)
     cam.title("camera timestamp -> publish: no camera timestamps on this host's clock");

@@ -25,7 +25,10 @@ struct FrameSample {
   double max_slip_mm = 0;  // largest per-frame displacement among in-contact elements
   double dy_mm = 0;        // signed dy of that element (or of --element)
   bool touch = false, slip = false, over = false;
-  double x_mm = kNaN;  // fingertip x (Fig. 10), NaN when unknown
+  // Fig. 10's x: the position along the transport (finish() sets it from world_x/y_mm), NaN
+  // when unknown.
+  double x_mm = kNaN;
+  double world_x_mm = kNaN, world_y_mm = kNaN;
   double camera_to_publish_ms = kNaN;
   double receive_to_publish_ms = kNaN;
   double publish_to_record_ms = kNaN;
@@ -55,12 +58,19 @@ struct SensorData {
   std::map<std::uint32_t, std::pair<double, double>> centroid_sum;
   std::map<std::uint32_t, int> centroid_count;
   std::uint64_t incomplete = 0;
+  // Element ids seen in the frames (every element appears in every frame).
+  std::vector<std::uint32_t> element_ids;
+  // The transport direction (unit, world x/y) Fig. 10's x is measured along; world x when the
+  // fingertip did not move between its first and last touch.
+  double transport_x = 1, transport_y = 0;
+  bool transport_known = false;
 };
 
 struct EventMark {
   double t_s = 0;
   std::string kind;
   std::string text;
+  std::uint32_t cycle = 0;
 };
 
 struct PlotOptions {
@@ -87,6 +97,8 @@ class PlotData {
   PositionSource position_source() const { return source_; }
   std::string position_source_text() const;
   const PlotOptions& options() const { return options_; }
+  // The log's first and last frame time (s from its first record), for --at.
+  std::optional<std::pair<double, double>> frame_time_range() const;
 
  private:
   SensorData* sensor(const std::string& id);
@@ -99,8 +111,8 @@ class PlotData {
   std::vector<EventMark> events_;
   std::optional<std::int64_t> first_ns_;
   PositionSource source_ = PositionSource::kNone;
-  double truth_x_mm_ = kNaN;
-  std::map<std::string, double> arm_x_mm_;  // per fingertip sensor id
+  double truth_x_mm_ = kNaN, truth_y_mm_ = kNaN;
+  std::map<std::string, std::pair<double, double>> arm_xy_mm_;  // per fingertip sensor id
   bool twist_phase_ = false;
   v1::Envelope envelope_;
   std::vector<ElementReading> readings_;

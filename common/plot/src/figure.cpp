@@ -111,17 +111,23 @@ struct Extent {
   bool empty() const { return !(lo <= hi); }
 };
 
+bool is_point_series(Series::Kind k) {
+  return k == Series::Kind::kLine || k == Series::Kind::kScatter || k == Series::Kind::kStep;
+}
+
 struct DataExtent {
   Extent x;
   Extent y;
   bool bars_from_zero = false;  // a bar series starts at 0 on a linear y axis
 };
 
-DataExtent extent_of(const Panel& p) {
+// skip_points: only the series that are not lines, scatters or steps.
+DataExtent extent_of(const Panel& p, bool skip_points = false) {
   const Scale xs = p.x_axis().scale;
   const Scale ys = p.y_axis().scale;
   DataExtent d;
   for (const Series& s : p.series()) {
+    if (skip_points && is_point_series(s.kind)) continue;
     switch (s.kind) {
       case Series::Kind::kLine:
       case Series::Kind::kScatter:
@@ -163,6 +169,10 @@ DataExtent extent_of(const Panel& p) {
       case Series::Kind::kHLine:
         d.y.add(s.y[0], ys);
         break;
+      case Series::Kind::kBand:
+        d.y.add(s.y[0], ys);
+        d.y.add(s.y[1], ys);
+        break;
       case Series::Kind::kCircle:
         if (!std::isfinite(s.x[0]) || !std::isfinite(s.y[0]) || !std::isfinite(s.u[0])) break;
         d.x.add(s.x[0] - s.u[0], xs);
@@ -180,8 +190,33 @@ struct Range {
   double hi = 1;
 };
 
-// The axis range: fixed ends where set, otherwise the data with a 4 % margin.
-Range resolve(const Extent& e, const Panel::Axis& a, bool pin_zero) {
+// A robust y axis: the quantile range of the points within the x range, widened by the margin,
+// joined with everything that is not a point (thresholds, bands, bars, arrows, circles), which
+// is always shown whole. The result is an extent in data units, without the usual 4 % margin.
+Extent robust_y_extent(const Panel& p, Range x, Scale xs, const RobustRange& r) {
+  const Scale ys = p.y_axis().scale;
+  std::vector<double> v;
+  for (const Series& s : p.series()) {
+    if (!is_point_series(s.kind)) continue;
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      if (!shown(s.x[i], xs) || !shown(s.y[i], ys)) continue;
+      if (s.x[i] < std::min(x.lo, x.hi) || s.x[i] > std::max(x.lo, x.hi)) continue;
+      v.push_back(to_axis(s.y[i], ys));
+    }
+  }
+  Extent e = extent_of(p, true).y;
+  if (const auto q = robust_range(v, r)) {
+    Extent qe;
+    qe.lo = ys == Scale::kLog ? std::pow(10.0, q->first) : q->first;
+    qe.hi = ys == Scale::kLog ? std::pow(10.0, q->second) : q->second;
+    e.add(qe);
+  }
+  return e;
+}
+
+// The axis range: fixed ends where set, otherwise the data with a 4 % margin (none when `e`
+// already has one: a robust range).
+Range resolve(const Extent& e, const Panel::Axis& a, bool pin_zero, bool padded = true) {
   if (a.lo && a.hi) return {*a.lo, *a.hi};
   const bool log = a.scale == Scale::kLog;
   double lo = 0;
@@ -197,7 +232,7 @@ Range resolve(const Extent& e, const Panel::Axis& a, bool pin_zero) {
       lo -= pad;
       hi += pad;
     } else {
-      const double pad = 0.04 * (hi - lo);
+      const double pad = padded ? 0.04 * (hi - lo) : 0.0;
       if (!(pin_zero && !log && e.lo == 0)) lo -= pad;
       hi += pad;
     }
@@ -408,7 +443,8 @@ void draw_series(cv::Mat& img, const PanelLayout& l, const Series& s, std::vecto
   Canvas cv(img, l);
   const bool geometry = pass == Pass::kGeometry;
   const bool has_text = s.kind == Series::Kind::kScatter || s.kind == Series::Kind::kVLine ||
-                        s.kind == Series::Kind::kHLine;
+                        s.kind == Series::Kind::kHLine || s.kind == Series::Kind::kBand ||
+                        s.kind == Series::Kind::kBars;
   if (!geometry && !has_text) return;
   const int w = std::max(1, s.style.line_width);
   switch (s.kind) {
@@ -477,6 +513,29 @@ void draw_series(cv::Mat& img, const PanelLayout& l, const Series& s, std::vecto
       break;
     }
     case Series::Kind::kBars: {
+      if (!geometry) {
+        // A histogram's values outside its range: the count at that edge, with an arrow.
+        for (const bool high : {false, true}) {
+          const std::size_t n = high ? s.beyond_range : s.below_range;
+          if (n == 0) continue;
+          const std::string text =
+              high ? std::to_string(n) + " beyond ->" : "<- " + std::to_string(n) + " below";
+          const TextBox b = measure(text, kTickFont);
+          const int x0 = high ? l.right - 6 - b.w : l.left + 6;
+          int y0 = l.top + 6;
+          Box box{x0 - 2, y0 - 2, x0 + b.w + 2, y0 + b.h + b.base + 2};
+          while (std::any_of(taken.begin(), taken.end(),
+                             [&](const Box& t) { return t.overlaps(box); }) &&
+                 box.y1 + b.h + 4 < l.bottom) {
+            y0 += b.h + b.base + 3;
+            box = {x0 - 2, y0 - 2, x0 + b.w + 2, y0 + b.h + b.base + 2};
+          }
+          taken.push_back(box);
+          cv::rectangle(img, {box.x0, box.y0}, {box.x1, box.y1}, bgr(kWhite), cv::FILLED);
+          text_at(img, text, x0, y0, 0, 0, kTickFont, darker(s.color));
+        }
+        break;
+      }
       for (std::size_t i = 0; i < s.x.size(); ++i) {
         if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]) || !std::isfinite(s.u[i])) continue;
         const double base = l.y_scale == Scale::kLog ? l.y_lo : 0.0;
@@ -529,7 +588,43 @@ void draw_series(cv::Mat& img, const PanelLayout& l, const Series& s, std::vecto
         break;
       }
       if (s.texts.empty() || s.texts[0].empty() || py < l.top || py >= l.bottom) break;
-      text_at(img, s.texts[0], l.right - 4, py - 3, 1, 1, kTickFont, s.color);
+      const TextBox b = measure(s.texts[0], kTickFont);
+      const int x1 = l.right - 4;
+      const int yb = static_cast<int>(py) - 3;
+      const Box box{x1 - b.w - 2, yb - b.h - 2, x1 + 2, yb + b.base + 1};
+      taken.push_back(box);
+      cv::rectangle(img, {box.x0, box.y0}, {box.x1, box.y1}, bgr(kWhite), cv::FILLED);
+      text_at(img, s.texts[0], x1, py - 3, 1, 1, kTickFont, s.color);
+      break;
+    }
+    case Series::Kind::kBand: {
+      const double p0 = l.y_px(s.y[0]);
+      const double p1 = l.y_px(s.y[1]);
+      if (!std::isfinite(p0) || !std::isfinite(p1)) break;
+      const int top = std::clamp(static_cast<int>(std::lround(std::min(p0, p1))), l.top, l.bottom);
+      const int bot = std::clamp(static_cast<int>(std::lround(std::max(p0, p1))), l.top, l.bottom);
+      if (geometry) {
+        if (bot > top) {
+          // 20 % of the colour over what is below (grid lines stay visible through it).
+          cv::Mat roi = img(cv::Rect(l.left, top, l.right - l.left, bot - top));
+          cv::Mat fill(roi.size(), roi.type(), bgr(s.color));
+          cv::addWeighted(roi, 0.8, fill, 0.2, 0, roi);
+        }
+        for (const double py : {p0, p1})
+          cv.polyline({{static_cast<double>(l.left), py}, {l.right - 1.0, py}}, s.color,
+                      std::max(1, s.style.line_width - 1), true);
+        break;
+      }
+      if (s.texts.empty() || s.texts[0].empty()) break;
+      const TextBox b = measure(s.texts[0], kTickFont);
+      // Above the band's upper edge at the left, or inside it when there is no room above.
+      const int x0 = l.left + 6;
+      int y0 = top - 4 - b.h - b.base;
+      if (y0 < l.top + 2) y0 = top + 3;
+      const Box box{x0 - 2, y0 - 1, x0 + b.w + 2, y0 + b.h + b.base + 1};
+      taken.push_back(box);
+      cv::rectangle(img, {box.x0, box.y0}, {box.x1, box.y1}, bgr(kWhite), cv::FILLED);
+      text_at(img, s.texts[0], x0, y0, 0, 0, kTickFont, darker(s.color));
       break;
     }
     case Series::Kind::kCircle: {
@@ -546,7 +641,112 @@ void draw_series(cv::Mat& img, const PanelLayout& l, const Series& s, std::vecto
   }
 }
 
-void draw_legend(cv::Mat& img, const PanelLayout& l, const Panel& p) {
+// Outlier markers: a filled triangle on the edge pointing out of the plot area; the counts in
+// the top and bottom left corners.
+void draw_outliers(cv::Mat& img, const PanelLayout& l, std::vector<Box>& taken) {
+  for (const PanelLayout::Outlier& o : l.outliers) {
+    const double dir = o.above ? 1.0 : -1.0;  // from the apex into the plot area
+    const std::array<cv::Point, 3> tri{sub({o.x_px, o.y_px}), sub({o.x_px - 4, o.y_px + dir * 7}),
+                                       sub({o.x_px + 4, o.y_px + dir * 7})};
+    cv::fillConvexPoly(img, tri.data(), 3, bgr(darker(o.color)), cv::LINE_AA, kShift);
+  }
+  for (const bool above : {true, false}) {
+    const std::size_t n = above ? l.above : l.below;
+    if (n == 0) continue;
+    const std::string text = std::to_string(n) + (n == 1 ? " point " : " points ") +
+                             (above ? "above the axis (^)" : "below the axis (v)");
+    const TextBox b = measure(text, kTickFont);
+    const int x0 = l.left + 6;
+    const int y0 = above ? l.top + 10 : l.bottom - 11 - b.h - b.base;
+    const Box box{x0 - 2, y0 - 2, x0 + b.w + 2, y0 + b.h + b.base + 2};
+    taken.push_back(box);
+    cv::rectangle(img, {box.x0, box.y0}, {box.x1, box.y1}, bgr(kWhite), cv::FILLED);
+    text_at(img, text, x0, y0, 0, 0, kTickFont, kTextColor);
+  }
+}
+
+// How much a legend box would hide: data points (sampled every few pixels along lines and
+// steps), threshold and event lines crossing it, and labels it would cover (the worst).
+double legend_cost(const Box& box, const PanelLayout& l, const Panel& p,
+                   const std::vector<Box>& taken) {
+  double cost = 0;
+  const auto inside = [&](P q) {
+    return q.x >= box.x0 && q.x <= box.x1 && q.y >= box.y0 && q.y <= box.y1;
+  };
+  for (const Series& s : p.series()) {
+    switch (s.kind) {
+      case Series::Kind::kLine:
+      case Series::Kind::kStep: {
+        P prev{kNaN, kNaN};
+        for (std::size_t i = 0; i < s.x.size(); ++i) {
+          const P q{l.x_px(s.x[i]), l.y_px(s.y[i])};
+          if (!Canvas::ok(q)) {
+            prev = q;
+            continue;
+          }
+          if (Canvas::ok(prev)) {
+            // A step holds its value to the next point: sample the corner path.
+            const P mid = s.kind == Series::Kind::kStep ? P{q.x, prev.y} : q;
+            for (const auto& [a, b] : {std::pair{prev, mid}, std::pair{mid, q}}) {
+              const double len = std::hypot(b.x - a.x, b.y - a.y);
+              const int k = std::min(2000, static_cast<int>(len / 3));
+              for (int j = 1; j <= k; ++j) {
+                const double t = static_cast<double>(j) / (k + 1);
+                if (inside({a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)})) cost += 1;
+              }
+            }
+          }
+          if (inside(q)) cost += 1;
+          prev = q;
+        }
+        break;
+      }
+      case Series::Kind::kScatter:
+      case Series::Kind::kArrows:
+        for (std::size_t i = 0; i < s.x.size(); ++i)
+          if (inside({l.x_px(s.x[i]), l.y_px(s.y[i])})) cost += 3;
+        break;
+      case Series::Kind::kBars:
+        for (std::size_t i = 0; i < s.x.size(); ++i) {
+          const double x0 = l.x_px(s.x[i] - s.u[i] / 2);
+          const double x1 = l.x_px(s.x[i] + s.u[i] / 2);
+          const double y1 = l.y_px(s.y[i]);
+          if (!std::isfinite(x0) || !std::isfinite(x1) || !std::isfinite(y1)) continue;
+          const double w = std::min(x1, static_cast<double>(box.x1)) - std::max(x0, 1.0 * box.x0);
+          const double h =
+              std::min(l.bottom - 1.0, static_cast<double>(box.y1)) - std::max(y1, 1.0 * box.y0);
+          if (w > 0 && h > 0) cost += w * h / 9;
+        }
+        break;
+      case Series::Kind::kVLine: {
+        const double x = l.x_px(s.x[0]);
+        if (x >= box.x0 && x <= box.x1) cost += (box.y1 - box.y0) / 3.0;
+        break;
+      }
+      case Series::Kind::kHLine: {
+        const double y = l.y_px(s.y[0]);
+        if (y >= box.y0 && y <= box.y1) cost += (box.x1 - box.x0) / 3.0;
+        break;
+      }
+      case Series::Kind::kBand:
+        for (const double v : s.y) {
+          const double y = l.y_px(v);
+          if (y >= box.y0 && y <= box.y1) cost += (box.x1 - box.x0) / 3.0;
+        }
+        break;
+      case Series::Kind::kCircle:
+        break;
+    }
+  }
+  for (const Box& t : taken)
+    if (t.overlaps(box)) cost += 1e6;
+  for (const PanelLayout::Outlier& o : l.outliers)
+    if (inside({o.x_px, o.y_px})) cost += 3;
+  return cost;
+}
+
+void draw_legend(cv::Mat& img, const PanelLayout& l, const Panel& p,
+                 const std::vector<Box>& taken) {
   if (!p.legend_corner()) return;
   std::vector<const Series*> entries;
   for (const Series& s : p.series())
@@ -564,11 +764,27 @@ void draw_legend(cv::Mat& img, const PanelLayout& l, const Panel& p) {
   row_h = std::max(row_h, 14);
   const int w = kPad + kSample + 6 + text_w + kPad;
   const int h = kPad + row_h * static_cast<int>(entries.size()) + kPad - 4;
-  const Corner c = *p.legend_corner();
-  const bool right = c == Corner::kTopRight || c == Corner::kBottomRight;
-  const bool top = c == Corner::kTopRight || c == Corner::kTopLeft;
-  const int x0 = right ? l.right - 8 - w : l.left + 8;
-  const int y0 = top ? l.top + 8 : l.bottom - 8 - h;
+  const auto box_at = [&](Corner c) {
+    const bool right = c == Corner::kTopRight || c == Corner::kBottomRight;
+    const bool top = c == Corner::kTopRight || c == Corner::kTopLeft;
+    const int bx = right ? l.right - 8 - w : l.left + 8;
+    const int by = top ? l.top + 8 : l.bottom - 8 - h;
+    return Box{bx, by, bx + w, by + h};
+  };
+  Corner c = *p.legend_corner();
+  if (c == Corner::kBest) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const Corner k :
+         {Corner::kTopRight, Corner::kTopLeft, Corner::kBottomRight, Corner::kBottomLeft}) {
+      const double cost = legend_cost(box_at(k), l, p, taken);
+      if (cost < best) {
+        best = cost;
+        c = k;
+      }
+    }
+  }
+  const int x0 = box_at(c).x0;
+  const int y0 = box_at(c).y0;
   cv::Mat roi = img(cv::Rect(0, 0, img.cols, img.rows));
   cv::rectangle(roi, {x0, y0}, {x0 + w, y0 + h}, bgr(kWhite), cv::FILLED);
   cv::rectangle(roi, {x0, y0}, {x0 + w, y0 + h}, bgr(Color{190, 190, 190}), 1);
@@ -612,7 +828,58 @@ void draw_legend(cv::Mat& img, const PanelLayout& l, const Panel& p) {
   }
 }
 
+// Points beyond the y range, within the x range: counted, and one marker per column and edge.
+void find_outliers(const Panel& p, PanelLayout& l) {
+  if (!p.y_axis().robust && !p.y_axis().outlier_markers) return;
+  const double x0 = std::min(l.x_lo, l.x_hi);
+  const double x1 = std::max(l.x_lo, l.x_hi);
+  std::vector<std::uint8_t> seen(static_cast<std::size_t>(std::max(l.right, 1)), 0);
+  for (const Series& s : p.series()) {
+    if (!is_point_series(s.kind)) continue;
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      if (!shown(s.x[i], l.x_scale) || !shown(s.y[i], l.y_scale)) continue;
+      if (s.x[i] < x0 || s.x[i] > x1) continue;
+      const bool above = s.y[i] > l.y_hi;
+      if (!above && !(s.y[i] < l.y_lo)) continue;
+      ++(above ? l.above : l.below);
+      const double px = l.x_px(s.x[i]);
+      const auto col = static_cast<std::size_t>(
+          std::clamp(static_cast<long>(std::lround(px)), 0L, static_cast<long>(seen.size()) - 1));
+      const std::uint8_t bit = above ? 1 : 2;
+      if ((seen[col] & bit) != 0) continue;
+      seen[col] |= bit;
+      l.outliers.push_back(
+          {px, above ? static_cast<double>(l.top) : l.bottom - 1.0, above, s.color});
+    }
+  }
+}
+
 }  // namespace
+
+std::optional<std::pair<double, double>> robust_range(std::span<const double> values,
+                                                      RobustRange r) {
+  if (!(r.lo_quantile >= 0 && r.lo_quantile <= r.hi_quantile && r.hi_quantile <= 1) ||
+      !(r.margin >= 0) || !std::isfinite(r.margin)) {
+    throw std::invalid_argument(
+        "robust range: quantiles must satisfy 0 <= lo <= hi <= 1 and "
+        "the margin must be finite and >= 0");
+  }
+  std::vector<double> v;
+  v.reserve(values.size());
+  for (double x : values)
+    if (std::isfinite(x)) v.push_back(x);
+  if (v.empty()) return std::nullopt;
+  std::sort(v.begin(), v.end());
+  // Nearest rank: the smallest value with at least q of the values at or below it.
+  const auto rank = [&](double q) {
+    const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
+    return v[std::clamp<std::size_t>(k, 1, v.size()) - 1];
+  };
+  const double lo = r.lo_quantile == 0 ? v.front() : rank(r.lo_quantile);
+  const double hi = rank(r.hi_quantile);
+  const double pad = r.margin * (hi - lo);
+  return std::pair{lo - pad, hi + pad};
+}
 
 // --- palette ------------------------------------------------------------------------------------
 
@@ -674,6 +941,16 @@ Panel& Panel::y_range(double lo, double hi) {
   check_range("y", lo, hi, y_.scale);
   y_.lo = lo;
   y_.hi = hi;
+  return *this;
+}
+Panel& Panel::y_robust(RobustRange r) {
+  robust_range(std::span<const double>{}, r);  // checks r
+  y_.robust = r;
+  y_.outlier_markers = true;
+  return *this;
+}
+Panel& Panel::outlier_markers(bool on) {
+  y_.outlier_markers = on;
   return *this;
 }
 Panel& Panel::equal_aspect(bool on) {
@@ -783,13 +1060,34 @@ Panel& Panel::histogram(std::span<const double> values, int bins, std::string la
   std::vector<double> counts(static_cast<std::size_t>(bins), 0.0);
   for (int i = 0; i < bins; ++i)
     centres[static_cast<std::size_t>(i)] = a + (i + 0.5) * width;
+  std::size_t below = 0;
+  std::size_t beyond = 0;
   for (double v : values) {
-    if (!std::isfinite(v) || v < a || v > b) continue;
+    if (!std::isfinite(v)) continue;
+    if (v < a || v > b) {
+      ++(v < a ? below : beyond);
+      continue;
+    }
     const auto k =
         std::min(static_cast<std::size_t>((v - a) / width), static_cast<std::size_t>(bins - 1));
     counts[k] += 1;
   }
-  return bars(centres, counts, width, std::move(label), style);
+  bars(centres, counts, width, std::move(label), style);
+  series_.back().below_range = below;
+  series_.back().beyond_range = beyond;
+  return *this;
+}
+
+Panel& Panel::histogram(std::span<const double> values, int bins, RobustRange range,
+                        std::string label, Style style) {
+  const auto r = robust_range(values, range);
+  if (!r) return histogram(values, bins, std::move(label), style);
+  // The margin widens the range towards the outliers, not below the smallest value or above the
+  // largest: no empty bins beyond the data.
+  const auto all = robust_range(values, RobustRange{0, 1, 0});
+  const double lo = std::max(r->first, all->first);
+  const double hi = std::min(r->second, all->second);
+  return histogram(values, bins, std::move(label), style, lo, std::max(hi, lo));
 }
 
 Panel& Panel::arrows(std::span<const double> x, std::span<const double> y,
@@ -822,6 +1120,17 @@ Panel& Panel::hline(double y, std::string text, Style style) {
   s.texts = {std::move(text)};
   s.style = style;
   s.color = style.color.value_or(kFrameColor);
+  return add(std::move(s));
+}
+
+Panel& Panel::band(double lo, double hi, std::string text, Style style) {
+  check_range("band", lo, hi, y_.scale);
+  Series s;
+  s.kind = Series::Kind::kBand;
+  s.y = {lo, hi};
+  s.texts = {std::move(text)};
+  s.style = style;
+  s.color = style.color.value_or(kGray);
   return add(std::move(s));
 }
 
@@ -933,7 +1242,9 @@ std::vector<PanelLayout> Figure::layout() const {
     l.x_scale = shared ? panels_[0].x_axis().scale : p.x_axis().scale;
     l.y_scale = p.y_axis().scale;
     base_x[i] = shared ? *shared : resolve(ext[i].x, p.x_axis(), false);
-    base_y[i] = resolve(ext[i].y, p.y_axis(), ext[i].bars_from_zero);
+    const auto& robust = p.y_axis().robust;
+    const Extent ye = robust ? robust_y_extent(p, base_x[i], l.x_scale, *robust) : ext[i].y;
+    base_y[i] = resolve(ye, p.y_axis(), ext[i].bars_from_zero, !robust);
   }
 
   const TextBox tick_box = measure("0123456789", kTickFont);
@@ -1030,6 +1341,8 @@ std::vector<PanelLayout> Figure::layout() const {
     l.top = std::clamp(l.top, 0, height_ - 2);
     l.bottom = std::clamp(l.bottom, l.top + 2, height_);
   }
+  for (std::size_t i = 0; i < n; ++i)
+    find_outliers(panels_[i], out[i]);
   return out;
 }
 
@@ -1059,7 +1372,10 @@ Raster Figure::render() const {
     // Series, then the frame over their clipped ends.
     std::vector<Box> taken;
     for (const Series& s : p.series())
-      draw_series(img, l, s, taken, Pass::kGeometry);
+      if (s.kind == Series::Kind::kBand) draw_series(img, l, s, taken, Pass::kGeometry);
+    for (const Series& s : p.series())
+      if (s.kind != Series::Kind::kBand) draw_series(img, l, s, taken, Pass::kGeometry);
+    draw_outliers(img, l, taken);
     for (const Series& s : p.series())
       draw_series(img, l, s, taken, Pass::kText);
     cv::rectangle(img, {l.left - 1, l.top - 1}, {l.right, l.bottom}, bgr(kFrameColor), 1);
@@ -1091,7 +1407,7 @@ Raster Figure::render() const {
     if (!p.title_text().empty())
       text_at(img, p.title_text(), (l.left + l.right) / 2.0, l.top - 5, 0.5, 1, kTitleFont,
               kTextColor);
-    draw_legend(img, l, p);
+    draw_legend(img, l, p, taken);
   }
   Raster r;
   r.width = width_;

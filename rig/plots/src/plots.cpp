@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "tactile/control/types.hpp"
 #include "tactile/plot/figure.hpp"
+#include "tactile/plot/task_figures.hpp"
 
 namespace tactile::rig {
 namespace {
@@ -19,71 +22,52 @@ std::string slug(const std::string& s) {
   return out;
 }
 
-bool key_event(std::uint8_t kind) {
-  using control::EventKind;
-  const auto k = static_cast<EventKind>(kind);
-  return k == EventKind::kGraspingEnded || k == EventKind::kGraspClassified ||
-         k == EventKind::kReleaseClassified || k == EventKind::kCapTight ||
-         k == EventKind::kTwistCycle || k == EventKind::kDone || k == EventKind::kAborted;
-}
-
-std::string event_text(const EventRecord& e) {
-  using control::EventKind;
-  switch (static_cast<EventKind>(e.kind)) {
-    case EventKind::kGraspingEnded:
-      return "grasped";
-    case EventKind::kGraspClassified:
-      return "grasp";
-    case EventKind::kReleaseClassified:
-      return "release";
-    case EventKind::kCapTight:
-      return "tight (" + std::to_string(e.cycle) + ")";
-    case EventKind::kTwistCycle:
-      return "cycle " + std::to_string(e.cycle);
-    case EventKind::kDone:
-      return "done";
-    case EventKind::kAborted:
-      return "aborted";
-    default:
-      return e.kind_name;
+// The run as the task figures take it (the same figures tactile_plot draws from a recording).
+plot::TaskFigureInput task_input(const LockstepResult& run, const control::Config& cfg) {
+  const std::array<const char*, kFingertips> names{"left", "right"};
+  plot::TaskFigureInput in;
+  in.f1_n = cfg.f1_n;
+  in.f2_n = cfg.f2_n;
+  in.dr_mm = cfg.dr_mm;
+  in.twist_dr_factor = cfg.twist_dr_factor;
+  in.x_source = "the apex, simulated";
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    plot::FingertipTrace f;
+    f.name = names[i];
+    for (const FrameSample& s : run.series.frames) {
+      f.t_s.push_back(s.t);
+      f.x_mm.push_back(s.fingertip_x_m[i] * 1000.0);
+      f.dy_mm.push_back(s.dy_mm[i]);
+      f.max_fz_n.push_back(s.max_fz_measured[i]);
+      f.max_fz_true_n.push_back(s.max_fz_true[i]);
+      f.touch.push_back(s.touch[i] ? 1 : 0);
+      f.slip.push_back(s.slip[i] ? 1 : 0);
+      f.over.push_back(s.over[i] ? 1 : 0);
+      f.true_slip.push_back(s.true_slip[i] ? 1 : 0);
+    }
+    in.fingertips.push_back(std::move(f));
   }
+  for (const FrameSample& s : run.series.frames) {
+    in.cap_t_s.push_back(s.t);
+    in.cap_angle_deg.push_back(s.cap_angle_deg);
+  }
+  for (const EventRecord& e : run.series.events) {
+    if (auto text = plot::task_event_label(e.kind_name, e.cycle)) in.events.push_back({e.t, *text});
+  }
+  return in;
 }
 
 }  // namespace
 
 std::vector<std::filesystem::path> write_plots(const LockstepResult& run,
+                                               const control::Config& controller,
                                                const std::filesystem::path& dir) {
   std::vector<std::filesystem::path> written;
-  const auto& frames = run.series.frames;
   const std::array<const char*, kFingertips> names{"left", "right"};
 
-  // Fig. 10: y-directional centroid change against x-directional fingertip position.
-  {
-    plot::Figure fig(1000, 600);
-    fig.title("Fig. 10: y-directional centroid change vs x-directional fingertip position");
-    auto& p = fig.add_panel();
-    p.x_label("fingertip position along the transport, cap to bottle [mm]")
-        .y_label("dy_G [mm] (+ along gravity)");
-    for (std::size_t i = 0; i < kFingertips; ++i) {
-      std::vector<double> x;
-      std::vector<double> y;
-      for (const FrameSample& f : frames) {
-        x.push_back(f.fingertip_x_m[i] * 1000.0);
-        y.push_back(f.dy_mm[i]);
-      }
-      plot::Style s;
-      s.line_width = 1;
-      p.line(x, y, names[i], s);
-    }
-    // Solid thin lines: the plot library's dashes can stall on long segments (reported).
-    plot::Style thin;
-    thin.line_width = 1;
-    thin.color = plot::kGray;
-    p.hline(0.004, "dr", thin);
-    p.hline(-0.004, "-dr", thin);
-    written.push_back(dir / "fig10.png");
-    fig.save_png(written.back());
-  }
+  const plot::TaskFigureInput in = task_input(run, controller);
+  written.push_back(dir / "fig10.png");
+  plot::fig10(in).save_png(written.back());
 
   // Fig. 3 style shear vector fields.
   int n = 0;
@@ -121,63 +105,45 @@ std::vector<std::filesystem::path> write_plots(const LockstepResult& run,
     fig.save_png(written.back());
   }
 
-  // Timeline.
-  {
-    plot::Figure fig(1400, 900);
-    fig.title("Timeline: forces, flags, cap and events").share_x();
-    std::vector<double> t;
-    for (const FrameSample& f : frames)
-      t.push_back(f.t);
-    auto& forces = fig.add_panel(1.3);
-    forces.y_label("max F_z [N]");
-    for (std::size_t i = 0; i < kFingertips; ++i) {
-      std::vector<double> m;
-      std::vector<double> tr;
-      for (const FrameSample& f : frames) {
-        m.push_back(f.max_fz_measured[i]);
-        tr.push_back(f.max_fz_true[i]);
-      }
-      plot::Style s;
-      s.line_width = 1;
-      forces.line(t, m, std::string(names[i]) + " measured", s);
-      forces.line(t, tr, std::string(names[i]) + " true", s);
-    }
-    auto& flags = fig.add_panel(1.2);
-    flags.y_label("flags");
-    const std::array<const char*, 4> flag_names{"TOUCH", "SLIP", "true slide", "OVER"};
-    for (std::size_t j = 0; j < flag_names.size(); ++j) {
-      std::vector<double> v;
-      for (const FrameSample& f : frames) {
-        bool on = false;
-        for (std::size_t i = 0; i < kFingertips; ++i) {
-          on = on || (j == 0   ? f.touch[i]
-                      : j == 1 ? f.slip[i]
-                      : j == 2 ? f.true_slip[i]
-                               : f.over[i]);
-        }
-        v.push_back(static_cast<double>(j) * 1.5 + (on ? 1.0 : 0.0));
-      }
-      plot::Style s;
-      s.line_width = 1;
-      flags.step(t, v, flag_names[j], s);
-    }
-    auto& cap = fig.add_panel();
-    cap.y_label("cap angle [deg]").x_label("simulated time [s]");
-    std::vector<double> angle;
-    for (const FrameSample& f : frames)
-      angle.push_back(f.cap_angle_deg);
-    cap.line(t, angle, "cap angle");
-    for (const EventRecord& e : run.series.events) {
-      if (!key_event(e.kind)) continue;
-      plot::Style s;
-      s.line_width = 1;
-      s.color = plot::kGray;
-      fig.mark(e.t, event_text(e), s);
-    }
-    written.push_back(dir / "timeline.png");
-    fig.save_png(written.back());
-  }
+  written.push_back(dir / "timeline.png");
+  plot::timeline(in).save_png(written.back());
   return written;
+}
+
+}  // namespace tactile::rig
+
+namespace tactile::rig {
+
+std::filesystem::path write_latency_plot(std::span<const double> latency_ms,
+                                         const std::filesystem::path& dir) {
+  plot::Figure fig(900, 420);
+  fig.title("camera timestamp -> ArmCommand received by the arm controller, real time");
+  auto& p = fig.add_panel();
+  p.x_label("latency [ms]").y_label("answered frames");
+  std::vector<double> sorted(latency_ms.begin(), latency_ms.end());
+  std::sort(sorted.begin(), sorted.end());
+  const auto rank = [&](double q) {
+    const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(sorted.size())));
+    return sorted[std::clamp<std::size_t>(k, 1, sorted.size()) - 1];
+  };
+  // The bulk: a pause of the machine tens of milliseconds long is counted at the edge.
+  p.histogram(latency_ms, 60, plot::RobustRange{0.0, 0.95, 0.5},
+              std::to_string(latency_ms.size()) + " answered frames");
+  if (!sorted.empty()) {
+    plot::Style marker;
+    marker.line_width = 1;
+    marker.color = plot::Color{200, 40, 40};
+    char text[64];
+    std::snprintf(text, sizeof text, "p50 %.2f ms", rank(0.5));
+    p.vline(rank(0.5), text, marker);
+    std::snprintf(text, sizeof text, "p99 %.2f ms", rank(0.99));
+    p.vline(rank(0.99), text, marker);
+    std::snprintf(text, sizeof text, "max %.1f ms", sorted.back());
+    p.title(text);
+  }
+  const auto path = dir / "latency.png";
+  fig.save_png(path);
+  return path;
 }
 
 }  // namespace tactile::rig

@@ -466,6 +466,7 @@ void RealtimeRun::finish() {
   if (ended_ && rep_.completed) rep_.end_reason = "done";
   if (!latencies_ms_.empty()) {
     result_.latency_samples = latencies_ms_.size();
+    result_.latency_ms = latencies_ms_;
     rep_.latency_ms = Report::Latency{
         nearest_rank_percentile(latencies_ms_, 0.50), nearest_rank_percentile(latencies_ms_, 0.99),
         *std::max_element(latencies_ms_.begin(), latencies_ms_.end())};

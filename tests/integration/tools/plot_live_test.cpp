@@ -105,7 +105,7 @@ TEST(Plot, DrawsEveryFigureFromALog) {
                                (dir / "out").string(), "--at", "0.2", "--at", "0.9"},
                               60s);
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("Fig. 10 fingertip x: GroundTruth object_position_m.x"), std::string::npos)
+  EXPECT_NE(r.out.find("Fig. 10 fingertip x: GroundTruth object_position_m"), std::string::npos)
       << r.out;
   for (const char* name : {"shear_left.png", "shear_right.png", "fig10.png", "forces_left.png",
                            "forces_right.png", "timeline.png", "latency.png"}) {
@@ -125,6 +125,19 @@ TEST(Plot, WithoutPositionsFig10IsAgainstTimeAndSaysSo) {
   EXPECT_NE(r.out.find("Fig. 10 fingertip x: none in the log"), std::string::npos) << r.out;
   EXPECT_TRUE(is_png(dir / "out" / "fig10.png"));
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "timeline.png"));
+}
+
+TEST(Plot, AtPastTheEndIsAnErrorNamingTheRecordingsTimeRange) {
+  TempDir dir;
+  write_test_log(dir / "run.tlog", true);
+  const auto r = testing::run({TACTILE_PLOT_PATH, (dir / "run.tlog").string(), "-o",
+                               (dir / "out").string(), "--at", "0.5", "--at", "999"},
+                              60s);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  // 100 frames 10 ms apart, the first 0.5 ms after the log's first record.
+  EXPECT_NE(r.err.find("--at 999: past the end of"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("0.001 to 0.991 s"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "shear_left.png"));
 }
 
 TEST(Plot, BadInputGivesOneClearLine) {

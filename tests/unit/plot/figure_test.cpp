@@ -341,6 +341,110 @@ TEST(Figure, SharedXAlignsPanels) {
   }
 }
 
+// The axis choice on data with outliers: a robust y range spans the bulk of the data, the two
+// outliers become markers on the edges they lie beyond, and thresholds are always in range.
+TEST(Figure, RobustRangeShowsTheBulkAndMarksOutliersOnTheEdge) {
+  std::vector<double> x;
+  std::vector<double> y;
+  for (int i = 0; i < 200; ++i) {
+    x.push_back(i);
+    y.push_back(1.0 + 0.5 * std::sin(i * 0.3));
+  }
+  y[120] = 500;  // one pause of the machine
+  y[40] = -300;  // and one the other way
+  y[41] = kNaN;  // skipped, not counted
+  Figure fig(600, 400);
+  Panel& p = fig.add_panel();
+  p.grid(false).no_legend().line(x, y, "", solid(kBlue)).y_robust();
+  const PanelLayout l = fig.layout()[0];
+  // Quantiles 1 % and 99 % of the bulk (0.5 .. 1.5) widened by 15 % of their span each side.
+  EXPECT_GT(l.y_lo, 0.3);
+  EXPECT_LT(l.y_lo, 0.5);
+  EXPECT_GT(l.y_hi, 1.5);
+  EXPECT_LT(l.y_hi, 1.7);
+  EXPECT_EQ(l.above, 1U);
+  EXPECT_EQ(l.below, 1U);
+  ASSERT_EQ(l.outliers.size(), 2U);
+  for (const PanelLayout::Outlier& o : l.outliers) {
+    const double want_x = o.above ? l.x_px(120) : l.x_px(40);
+    EXPECT_DOUBLE_EQ(o.x_px, want_x);
+    EXPECT_EQ(o.y_px, o.above ? l.top : l.bottom - 1);  // on the edge, not off the picture
+    EXPECT_EQ(o.color, kBlue);
+  }
+  // The markers are drawn: a dark triangle just inside the top edge above x = 120.
+  const Raster r = fig.render();
+  const int col = static_cast<int>(std::lround(l.x_px(120)));
+  EXPECT_NE(r.at(col, l.top + 4), kWhite);
+  const int col40 = static_cast<int>(std::lround(l.x_px(40)));
+  EXPECT_NE(r.at(col40, l.bottom - 5), kWhite);  // and above x = 40 on the bottom edge
+
+  // Without it, one outlier sets the scale: the bulk is a flat line in 1 % of the height.
+  Figure plain(600, 400);
+  plain.add_panel().line(x, y);
+  EXPECT_GE(plain.layout()[0].y_hi, 500);
+  EXPECT_TRUE(plain.layout()[0].outliers.empty());
+
+  // A threshold outside the bulk is always shown; a fixed end still wins.
+  Figure with_band(600, 400);
+  with_band.add_panel().line(x, y).band(-3, 3, "+-dr").y_robust();
+  EXPECT_LE(with_band.layout()[0].y_lo, -3);
+  EXPECT_GE(with_band.layout()[0].y_hi, 3);
+  EXPECT_EQ(with_band.layout()[0].above, 1U);
+  Figure fixed(600, 400);
+  fixed.add_panel().line(x, y).y_robust().y_range(0, 10);
+  EXPECT_EQ(fixed.layout()[0].y_lo, 0);
+  EXPECT_EQ(fixed.layout()[0].y_hi, 10);
+  EXPECT_EQ(fixed.layout()[0].above, 1U);
+  EXPECT_EQ(fixed.layout()[0].below, 1U);
+}
+
+TEST(Figure, RobustHistogramCountsWhatLiesBeyond) {
+  std::vector<double> v;
+  for (int i = 0; i < 1000; ++i)
+    v.push_back(0.5 + 0.001 * i);  // 0.5 .. 1.5 ms
+  v.push_back(48.0);               // one 48 ms pause
+  Figure fig(500, 300);
+  Panel& p = fig.add_panel();
+  p.histogram(v, 20, RobustRange{0.0, 0.99, 0.1});
+  const Series& s = p.series()[0];
+  EXPECT_EQ(s.beyond_range, 1U);  // the pause; the top 1 % lies within the margin
+  EXPECT_EQ(s.below_range, 0U);
+  EXPECT_LT(fig.layout()[0].x_hi, 2.0);
+  const auto r = robust_range(v, RobustRange{0.0, 1.0, 0.0});
+  ASSERT_TRUE(r.has_value());
+  EXPECT_EQ(r->first, 0.5);
+  EXPECT_EQ(r->second, 48.0);
+  EXPECT_FALSE(robust_range(std::vector<double>{kNaN}).has_value());
+  EXPECT_THROW(robust_range(v, RobustRange{0.9, 0.1, 0.1}), std::invalid_argument);
+  EXPECT_THROW(Figure(300, 300).add_panel().y_robust(RobustRange{0, 1, -1}), std::invalid_argument);
+}
+
+TEST(Figure, LegendGoesWhereItCoversTheLeastData) {
+  // Data fill the top half: the legend goes to a bottom corner.
+  std::vector<double> x;
+  std::vector<double> y;
+  for (int i = 0; i <= 100; ++i) {
+    x.push_back(i);
+    y.push_back(i % 2 == 0 ? 8 : 10);
+  }
+  Figure fig(500, 400);
+  Panel& p = fig.add_panel();
+  p.x_range(0, 100).y_range(0, 10).grid(false).line(x, y, "zigzag", solid(kBlue, 1));
+  const Raster r = fig.render();
+  const PanelLayout l = fig.layout()[0];
+  // The legend's frame (light grey) is in the bottom half, not in the top right.
+  int grey_bottom = 0;
+  int grey_top = 0;
+  for (int yy = l.top; yy < l.bottom; ++yy) {
+    for (int xx = l.left; xx < l.right; ++xx) {
+      if (r.at(xx, yy) == Color{190, 190, 190})
+        ++(yy > (l.top + l.bottom) / 2 ? grey_bottom : grey_top);
+    }
+  }
+  EXPECT_GT(grey_bottom, 20);
+  EXPECT_EQ(grey_top, 0);
+}
+
 TEST(Figure, EqualAspectGivesEqualScales) {
   Figure fig(800, 400);
   Panel& p = fig.add_panel();

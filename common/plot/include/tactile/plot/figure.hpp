@@ -25,6 +25,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace tactile::plot {
@@ -46,7 +47,23 @@ Color palette(std::size_t index);
 
 enum class Scale : std::uint8_t { kLinear, kLog };
 
-enum class Corner : std::uint8_t { kTopRight, kTopLeft, kBottomRight, kBottomLeft };
+// kBest: the corner where the legend covers the fewest data points and labels.
+enum class Corner : std::uint8_t { kTopRight, kTopLeft, kBottomRight, kBottomLeft, kBest };
+
+// An axis range chosen from the data that matters rather than from every point: the
+// [lo_quantile, hi_quantile] quantiles of the points' values (nearest rank), widened by `margin`
+// times their span on each side. One outlier then no longer sets the scale; points beyond the
+// range are drawn as markers at the edge of the axis and counted (PanelLayout::outliers).
+struct RobustRange {
+  double lo_quantile = 0.01;
+  double hi_quantile = 0.99;
+  double margin = 0.15;
+};
+
+// The robust range of `values` (non-finite values skipped); nullopt when none is finite.
+// Throws std::invalid_argument for quantiles outside 0 <= lo <= hi <= 1 or a negative margin.
+std::optional<std::pair<double, double>> robust_range(std::span<const double> values,
+                                                      RobustRange r = {});
 
 // How one series looks. Everything has a default: a series without a colour takes the next
 // palette colour of its panel.
@@ -68,15 +85,19 @@ struct Series {
     kArrows,
     kVLine,
     kHLine,
-    kCircle
+    kCircle,
+    kBand
   };
   Kind kind = Kind::kLine;
   std::vector<double> x;
   std::vector<double> y;
   std::vector<double> u;           // kBars: widths; kArrows: dx; kCircle: radius
   std::vector<double> v;           // kArrows: dy
-  std::vector<std::string> texts;  // kScatter: point labels; kVLine, kHLine: the line's text
-  std::string label;               // legend entry ("" = none)
+  std::vector<std::string> texts;  // kScatter: point labels; kVLine, kHLine, kBand: the text
+  // A histogram's values left out below its range and beyond it (drawn as a count at the edge).
+  std::size_t below_range = 0;
+  std::size_t beyond_range = 0;
+  std::string label;  // legend entry ("" = none)
   Style style;
   Color color;
 };
@@ -95,11 +116,19 @@ class Panel {
   // std::invalid_argument otherwise.
   Panel& x_range(double lo, double hi);
   Panel& y_range(double lo, double hi);
+  // The y range from the data that matters (RobustRange) instead of every point: the quantiles
+  // of the line, scatter and step points within the x range, together with every threshold
+  // (hline, band) and bar. Points beyond it become outlier markers at the edge. A fixed end
+  // (y_range) still wins.
+  Panel& y_robust(RobustRange r = {});
+  // With a fixed y range: points beyond it become markers at the edge too (on with y_robust).
+  Panel& outlier_markers(bool on = true);
   // One data unit is as many pixels along x as along y (vector fields, circles): the axis that
   // would be stretched gets a wider range. Linear axes only; ignored on a log axis.
   Panel& equal_aspect(bool on = true);
   Panel& grid(bool on = true);  // light lines at the ticks; on by default
-  // Where the legend goes (top right by default); it lists every series with a label.
+  // Where the legend goes (by default the corner where it covers the fewest data points and
+  // labels); it lists every series with a label.
   Panel& legend(Corner where);
   Panel& no_legend();
 
@@ -126,6 +155,11 @@ class Panel {
   Panel& histogram(std::span<const double> values, int bins, std::string label = {},
                    Style style = {}, std::optional<double> lo = std::nullopt,
                    std::optional<double> hi = std::nullopt);
+  // The same over the robust range of the values (latencies with a rare long pause), kept within
+  // the smallest and largest value: what lies outside is counted, not binned, and the count is
+  // written at that edge of the axis.
+  Panel& histogram(std::span<const double> values, int bins, RobustRange range,
+                   std::string label = {}, Style style = {});
   // Arrows from (x, y) to (x + s dx, y + s dy), s = style.arrow_scale (a quiver plot).
   Panel& arrows(std::span<const double> x, std::span<const double> y, std::span<const double> dx,
                 std::span<const double> dy, std::string label = {}, Style style = {});
@@ -134,6 +168,9 @@ class Panel {
   Panel& vline(double x, std::string text = {}, Style style = {});
   // A horizontal line across the panel at y (thresholds), with `text` at its right end.
   Panel& hline(double y, std::string text = {}, Style style = {});
+  // A shaded horizontal band from y = lo to y = hi with dashed edges and `text` at its left end
+  // (a threshold band such as +-dr). Drawn under every other series; always inside the range.
+  Panel& band(double lo, double hi, std::string text = {}, Style style = {});
   // A circle of radius r (data units) around (cx, cy); round on screen with equal_aspect().
   Panel& circle(double cx, double cy, double r, std::string label = {}, Style style = {});
 
@@ -142,6 +179,8 @@ class Panel {
     Scale scale = Scale::kLinear;
     std::optional<double> lo;
     std::optional<double> hi;
+    std::optional<RobustRange> robust;  // y only
+    bool outlier_markers = false;       // y only
   };
   // What the panel holds, as rendering reads it.
   const std::vector<Series>& series() const { return series_; }
@@ -161,7 +200,7 @@ class Panel {
   Axis y_;
   bool equal_aspect_ = false;
   bool grid_ = true;
-  std::optional<Corner> legend_ = Corner::kTopRight;
+  std::optional<Corner> legend_ = Corner::kBest;
   std::vector<Series> series_;
   std::size_t colors_used_ = 0;
 };
@@ -178,6 +217,17 @@ struct PanelLayout {
   Scale y_scale = Scale::kLinear;
   std::vector<double> x_ticks;
   std::vector<double> y_ticks;
+  // Points beyond the y range (y_robust, or outlier_markers with a fixed range), each drawn as a
+  // small triangle on the edge it lies beyond, pointing out: at most one per column and edge.
+  struct Outlier {
+    double x_px = 0;
+    double y_px = 0;  // the top row (above) or the bottom row (below) of the plot area
+    bool above = false;
+    Color color;  // the series'
+  };
+  std::vector<Outlier> outliers;
+  std::size_t above = 0;  // points beyond the top, within the x range (all, not one per column)
+  std::size_t below = 0;
 
   // Pixel position of a data value (NaN where it cannot be shown: not finite, or <= 0 on a log
   // axis). Values outside the range map outside the plot area.

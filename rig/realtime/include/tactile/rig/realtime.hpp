@@ -70,6 +70,7 @@ struct RealtimeResult {
   // Report (latency_ms filled), series and calibrations, as the lockstep runner gives them.
   LockstepResult run;
   std::uint64_t latency_samples = 0;
+  std::vector<double> latency_ms;  // every sample of latency_ms, in arrival order (latency.png)
   RealtimeCounters counters;
 };
 
