@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -33,6 +34,7 @@ struct Options {
   double refresh_s = 1.0 / 15.0;
   double interval_s = 1.0;
   double duration_s = 0;
+  double silence_timeout_s = 5.0;
   bool plain = false;
   bool screen = false;
   bool no_color = false;
@@ -61,6 +63,8 @@ int run(const Options& opt) {
   if (!(opt.refresh_s > 0)) throw std::invalid_argument("--refresh must be positive");
   if (!(opt.interval_s > 0)) throw std::invalid_argument("--interval must be positive");
   if (opt.duration_s < 0) throw std::invalid_argument("--duration must not be negative");
+  if (!(opt.silence_timeout_s >= 0))
+    throw std::invalid_argument("--silence-timeout must not be negative");
   if (opt.plain && opt.screen)
     throw std::invalid_argument("--plain and --screen exclude each other");
   std::vector<tactile::Calibration> cals;
@@ -105,6 +109,11 @@ int run(const Options& opt) {
       opt.duration_s > 0 ? start + static_cast<std::int64_t>(opt.duration_s * 1e9) : INT64_MAX;
   const auto period = static_cast<std::int64_t>((screen ? opt.refresh_s : opt.interval_s) * 1e9);
   std::int64_t next_draw = start;
+  // A viewer pointed at the wrong address would otherwise show an empty dome forever.
+  std::int64_t silence_check = opt.silence_timeout_s > 0
+                                   ? start + static_cast<std::int64_t>(opt.silence_timeout_s * 1e9)
+                                   : INT64_MAX;
+  std::string silent;
   if (screen && !write_all("\x1b[?1049h\x1b[?25l\x1b[2J")) return 1;
   tactile::recording::Sources::Message m;
   std::string frame;
@@ -112,6 +121,11 @@ int run(const Options& opt) {
   while (!tactile::util::stop_requested() && ok) {
     std::int64_t now = tactile::util::monotonic_ns();
     if (now >= end) break;
+    if (now >= silence_check) {
+      silent = sources.unheard();
+      if (!silent.empty()) break;
+      silence_check = INT64_MAX;
+    }
     if (now >= next_draw) {
       model.tick(now, tactile::util::realtime_ns());
       if (screen) {
@@ -135,8 +149,8 @@ int run(const Options& opt) {
       if (next_draw < now) next_draw = now + period;
     }
     now = tactile::util::monotonic_ns();
-    const auto wait = std::chrono::milliseconds(
-        std::clamp<std::int64_t>((std::min(next_draw, end) - now) / 1'000'000, 0, 100));
+    const auto wait = std::chrono::milliseconds(std::clamp<std::int64_t>(
+        (std::min({next_draw, end, silence_check}) - now) / 1'000'000, 0, 100));
     if (sources.receive(m, wait)) {
       const std::string_view topic(static_cast<const char*>(m.topic.data()), m.topic.size());
       const int ev =
@@ -149,6 +163,11 @@ int run(const Options& opt) {
     }
   }
   if (screen) write_all("\x1b[0m\x1b[?25h\x1b[?1049l");
+  if (!silent.empty()) {
+    std::fprintf(stderr, "tactile_live: nothing heard from %s within %g s\n", silent.c_str(),
+                 opt.silence_timeout_s);
+    return 1;
+  }
   if (!ok && !tactile::util::stop_requested()) {
     std::fprintf(stderr, "tactile_live: standard output: write failed\n");
     return 1;
@@ -184,6 +203,10 @@ int main(int argc, char** argv) {
   app.add_option("--interval", opt.interval_s, "seconds between lines in line mode")
       ->capture_default_str();
   app.add_option("--duration", opt.duration_s, "stop after this many seconds (0: until a signal)");
+  app.add_option("--silence-timeout", opt.silence_timeout_s,
+                 "exit 1, naming the endpoint, when an endpoint has sent nothing within this many "
+                 "seconds of the start (0: wait forever)")
+      ->capture_default_str();
   app.add_flag("--plain", opt.plain, "line mode even on a terminal");
   app.add_flag("--screen", opt.screen, "screen mode even when standard output is not a terminal");
   app.add_flag("--no-color", opt.no_color, "no colours (also when NO_COLOR is set)");

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -48,6 +49,7 @@ struct Options {
   bool overwrite = false;
   std::string note;
   double progress_s = 10.0;
+  double silence_timeout_s = 5.0;
   std::string log_level = "info";
 };
 
@@ -121,6 +123,8 @@ int run(Options opt) {
   if (opt.duration_s < 0) throw std::invalid_argument("--duration must not be negative");
   if (!(opt.flush_interval_s > 0)) throw std::invalid_argument("--flush-interval must be positive");
   if (!(opt.progress_s >= 0)) throw std::invalid_argument("--progress must not be negative");
+  if (!(opt.silence_timeout_s >= 0))
+    throw std::invalid_argument("--silence-timeout must not be negative");
   if (opt.raw_frames) opt.topics.emplace_back(tactile::wire::kRawTopicPrefix);
   if (opt.output.empty()) opt.output = default_output();
 
@@ -166,6 +170,10 @@ int run(Options opt) {
       opt.duration_s > 0 ? start + static_cast<std::int64_t>(opt.duration_s * 1e9) : INT64_MAX;
   std::int64_t next_progress =
       opt.progress_s > 0 ? start + static_cast<std::int64_t>(opt.progress_s * 1e9) : INT64_MAX;
+  // A recorder pointed at the wrong address would otherwise write an empty log and exit 0.
+  std::int64_t silence_check = opt.silence_timeout_s > 0
+                                   ? start + static_cast<std::int64_t>(opt.silence_timeout_s * 1e9)
+                                   : INT64_MAX;
   TopicCounts counts;
   Sources::Message m;
   std::uint64_t received = 0;
@@ -173,14 +181,23 @@ int run(Options opt) {
   while (!tactile::util::stop_requested()) {
     const std::int64_t now = tactile::util::monotonic_ns();
     if (now >= end || (opt.count > 0 && received >= opt.count)) break;
+    if (now >= silence_check) {
+      if (const std::string silent = sources.unheard(); !silent.empty()) {
+        std::fprintf(stderr, "tactile_record: nothing heard from %s within %g s\n", silent.c_str(),
+                     opt.silence_timeout_s);
+        code = 1;
+        break;
+      }
+      silence_check = INT64_MAX;
+    }
     if (now >= next_progress) {
       tactile::util::log_info("{} messages, {:.1f} MiB written: {}", received,
                               static_cast<double>(writer.bytes_out()) / (1 << 20),
                               counts.summary());
       next_progress = now + static_cast<std::int64_t>(opt.progress_s * 1e9);
     }
-    const auto wait = std::chrono::milliseconds(
-        std::clamp<std::int64_t>((std::min(end, next_progress) - now) / 1000000, 1, 50));
+    const auto wait = std::chrono::milliseconds(std::clamp<std::int64_t>(
+        (std::min({end, next_progress, silence_check}) - now) / 1000000, 1, 50));
     if (sources.receive(m, wait)) {
       const std::string_view topic(static_cast<const char*>(m.topic.data()), m.topic.size());
       const auto kind = topic.starts_with(tactile::wire::kRawTopicPrefix)
@@ -202,7 +219,7 @@ int run(Options opt) {
     }
   }
   if (writer.close() != WriteStatus::kOk) code = 1;
-  if (code != 0) {
+  if (code != 0 && !writer.error().empty()) {
     tactile::util::log_error("{}", writer.error());
     std::fprintf(stderr, "tactile_record: %s\n", writer.error().c_str());
   }
@@ -260,6 +277,10 @@ int main(int argc, char** argv) {
   app.add_flag("--overwrite", opt.overwrite, "replace an existing output file");
   app.add_option("--note", opt.note, "free text stored in the log's header");
   app.add_option("--progress", opt.progress_s, "seconds between progress lines (0: none)")
+      ->capture_default_str();
+  app.add_option("--silence-timeout", opt.silence_timeout_s,
+                 "exit 1, naming the endpoint, when an endpoint has sent nothing within this many "
+                 "seconds of the start (the log is still closed properly; 0: wait forever)")
       ->capture_default_str();
   app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
   try {

@@ -219,6 +219,24 @@ TEST(Live, LineModeFollowsRealPublishers) {
   EXPECT_EQ(r.out.find("\x1b"), std::string::npos);  // no escape codes into a pipe
 }
 
+TEST(Live, AnEndpointSilentForTheSilenceTimeoutEndsItNonZeroNamingThatEndpoint) {
+  zmq::context_t ctx;
+  wire::Publisher frames(ctx, "tcp://127.0.0.1:*");
+  wire::Publisher events(ctx, "tcp://127.0.0.1:*");
+  wire::Publisher silent(ctx, "tcp://127.0.0.1:*");
+  const auto start = std::chrono::steady_clock::now();
+  Process live({TACTILE_LIVE_PATH, frames.endpoint(), events.endpoint(), silent.endpoint(),
+                "--silence-timeout", "1", "--interval", "0.1"});
+  publish_until(frames, events, [&] { return !live.running(); });
+  const auto r = live.wait(10s);
+  const auto elapsed = std::chrono::steady_clock::now() - start;
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_GE(elapsed, 1s);
+  EXPECT_LT(elapsed, 8s);  // the timeout and a margin for a loaded machine
+  EXPECT_EQ(r.err, "tactile_live: nothing heard from " + silent.endpoint() + " within 1 s\n");
+  EXPECT_NE(r.out.find("left seq="), std::string::npos) << r.out;  // it showed what it heard
+}
+
 // Runs tactile_live on a pseudo-terminal (TERM=xterm) and collects what it draws.
 class PtyProcess {
  public:

@@ -293,6 +293,55 @@ TEST(Record, StopsCleanlyOnSignalsAndKeepsWhatItGot) {
   }
 }
 
+// Publishes an event on `pub` every 5 ms while `rec` runs (bounded).
+void publish_while_running(wire::Publisher& pub, Process& rec) {
+  v1::Envelope env;
+  env.mutable_event()->set_kind(v1::EVENT_KIND_TOUCH);
+  std::string buf;
+  wire::encode(env, buf);
+  const auto deadline = std::chrono::steady_clock::now() + 20s;
+  while (rec.running() && std::chrono::steady_clock::now() < deadline) {
+    pub.send(wire::kEventTopic, wire::bytes_of(buf));
+    std::this_thread::sleep_for(5ms);
+  }
+}
+
+TEST(Record, AnEndpointSilentForTheSilenceTimeoutEndsItNonZeroNamingThatEndpoint) {
+  TempDir dir;
+  zmq::context_t ctx;
+  wire::Publisher talking(ctx, "tcp://127.0.0.1:*");
+  wire::Publisher silent(ctx, "tcp://127.0.0.1:*");  // bound, so the connection succeeds
+  const auto path = dir / "silent.tlog";
+  const auto start = std::chrono::steady_clock::now();
+  Process rec({TACTILE_RECORD_PATH, "-o", path.string(), talking.endpoint(), silent.endpoint(),
+               "--silence-timeout", "1", "--flush-interval", "0.05"});
+  publish_while_running(talking, rec);
+  const auto r = rec.wait(10s);
+  const auto elapsed = std::chrono::steady_clock::now() - start;
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_FALSE(r.timed_out);
+  EXPECT_GE(elapsed, 1s);
+  EXPECT_LT(elapsed, 8s);  // the timeout and a margin for a loaded machine
+  EXPECT_NE(r.err.find("tactile_record: nothing heard from " + silent.endpoint() + " within 1 s\n"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("nothing heard from " + talking.endpoint()), std::string::npos) << r.err;
+  // The log is whole and holds what the other endpoint sent.
+  const auto log = read_log(path);
+  EXPECT_EQ(log.end, recording::ReadStatus::kEnd);
+  EXPECT_GE(log.per_topic.at(wire::kEventTopic), 1);
+
+  // Every endpoint heard within the timeout: it records on to the end of --duration.
+  const auto both = dir / "both.tlog";
+  Process rec2({TACTILE_RECORD_PATH, "-o", both.string(), talking.endpoint(), "--duration", "2",
+                "--silence-timeout", "1"});
+  publish_while_running(talking, rec2);
+  const auto r2 = rec2.wait(10s);
+  EXPECT_EQ(r2.exit_code, 0) << r2.err;
+  EXPECT_EQ(r2.err.find("nothing heard"), std::string::npos) << r2.err;
+  EXPECT_EQ(read_log(both).end, recording::ReadStatus::kEnd);
+}
+
 TEST(Record, KilledMidRunLeavesALogThatReadsUpToItsLastWholeFrame) {
   TempDir dir;
   zmq::context_t ctx;
@@ -335,9 +384,10 @@ TEST(Record, CurveSubscriptionTakesOnlyTheKeyHolder) {
   Process rec_good({TACTILE_RECORD_PATH, "-o", good.string(), "--curve",
                     pub.endpoint() + "=" + (dir / "sensor.pub").string(), "--client-key",
                     (dir / "recorder.key").string(), "--count", "5"});
+  // Refused, it hears nothing: it must wait for its signal, not give up on the silence.
   Process rec_bad({TACTILE_RECORD_PATH, "-o", bad.string(), "--curve",
-                   pub.endpoint() + "=" + (dir / "other.pub").string(), "--flush-interval",
-                   "0.01"});
+                   pub.endpoint() + "=" + (dir / "other.pub").string(), "--flush-interval", "0.01",
+                   "--silence-timeout", "0"});
   v1::Envelope env;
   env.mutable_event()->set_kind(v1::EVENT_KIND_OVER);
   std::string buf;

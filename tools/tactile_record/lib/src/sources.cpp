@@ -41,6 +41,7 @@ Sources::Sources(zmq::context_t& ctx, const SourceOptions& o) : topics_(o.topics
     sockets_.push_back(std::move(s));
     endpoints_.push_back(endpoint);
     curve_.push_back(security != nullptr);
+    heard_.push_back(false);
   };
   for (const auto& e : o.endpoints)
     add(e, nullptr);
@@ -55,9 +56,22 @@ Sources::Sources(zmq::context_t& ctx, const SourceOptions& o) : topics_(o.topics
 }
 
 bool Sources::try_receive(std::size_t i, Message& out) {
-  if (!wire::receive_pair(sockets_[i], out.topic, out.payload, malformed_)) return false;
+  const std::uint64_t malformed_before = malformed_;
+  const bool ok = wire::receive_pair(sockets_[i], out.topic, out.payload, malformed_);
+  if (ok || malformed_ != malformed_before) heard_[i] = true;
+  if (!ok) return false;
   out.source = i;
   return true;
+}
+
+std::string Sources::unheard() const {
+  std::string s;
+  for (std::size_t i = 0; i < endpoints_.size(); ++i) {
+    if (heard_[i]) continue;
+    if (!s.empty()) s += ", ";
+    s += endpoints_[i];
+  }
+  return s;
 }
 
 bool Sources::receive(Message& out, std::chrono::milliseconds timeout) {

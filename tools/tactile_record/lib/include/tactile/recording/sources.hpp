@@ -56,6 +56,10 @@ class Sources {
   bool curve(std::size_t i) const { return curve_[i]; }
   const std::vector<std::string>& topics() const { return topics_; }
   std::uint64_t malformed() const { return malformed_; }
+  // The endpoints nothing at all (not even a malformed message) has come from yet, joined with
+  // ", "; empty once every source was heard. What a recorder or viewer names when it gives up
+  // on a silent publisher (--silence-timeout, docs/tools.md).
+  std::string unheard() const;
   // For the log header.
   std::vector<v1::LogSource> describe() const;
 
@@ -65,6 +69,7 @@ class Sources {
   std::vector<zmq::socket_t> sockets_;
   std::vector<std::string> endpoints_;
   std::vector<bool> curve_;
+  std::vector<bool> heard_;
   std::vector<std::string> topics_;
   std::vector<zmq::pollitem_t> items_;
   std::size_t next_ = 0;

@@ -1,0 +1,116 @@
+// scripts/run-system as a user runs it, as root: the nodes' endpoints reachable from the host at
+// the addresses it prints (a veth pair into its private network namespace, removed at the end),
+// a recorder on the host hears frames, events and ground truth there, and --record --raw-frames
+// leaves a whole log that tactile_replay --remeasure checks bit for bit.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <regex>
+
+#include "process.hpp"
+#include "tactile/wire/envelope.hpp"
+#include "tools_support.hpp"
+
+namespace tactile {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::Process;
+using testing::TempDir;
+using tools_test::await_match;
+using tools_test::read_log;
+
+const std::filesystem::path kSource = TACTILE_SOURCE_DIR;
+
+// Another network than the default, so the test runs beside a run-system of the user's.
+constexpr const char* kHostNet = "10.77.19.0/30";
+constexpr const char* kNamespaceAddress = "10.77.19.2";
+
+TEST(RunSystem, EndpointsReachableFromTheHostAndTheRunRecordedWithRawFrames) {
+  ASSERT_EQ(::geteuid(), 0U) << "a veth pair into the host needs root (CI runs as root)";
+  TempDir dir;
+  const auto inside = dir / "inside.tlog";
+  const auto host = dir / "host.tlog";
+  Process run({"bash", (kSource / "scripts/run-system").string(), "--build", TACTILE_BUILD_DIR,
+               "--scenario", TACTILE_OBSERVE_SCENARIO, "--out", (dir / "out").string(), "--record",
+               inside.string(), "--raw-frames", "--host-net", kHostNet});
+  const auto line = await_match([&] { return run.err_so_far(); },
+                                "run-system: endpoints: frames (\\S+) events (\\S+) truth (\\S+)");
+  ASSERT_TRUE(line) << run.err_so_far();
+  // The documented addresses (docs/system.md): the namespace's end of the veth pair.
+  const std::string ns = std::string("tcp://") + kNamespaceAddress;
+  std::smatch m;
+  const std::string err = run.err_so_far();
+  ASSERT_TRUE(std::regex_search(
+      err, m,
+      std::regex("endpoints: frames (\\S+) events (\\S+) truth (\\S+) \\(the host is "
+                 "10\\.77\\.19\\.1\\)")))
+      << err;
+  EXPECT_EQ(m[1], ns + ":5555");
+  EXPECT_EQ(m[2], ns + ":5558");
+  EXPECT_EQ(m[3], ns + ":5557");
+  // The command it prints for recording from the host, with our file.
+  EXPECT_NE(err.find("record from the host: " + std::string(TACTILE_BUILD_DIR) +
+                     "/tools/tactile_record/tactile_record -o run.tlog " + m[1].str() + " " +
+                     m[2].str() + " " + m[3].str()),
+            std::string::npos)
+      << err;
+  Process recorder({TACTILE_RECORD_PATH, "-o", host.string(), m[1], m[2], m[3]});
+
+  // observe.yaml ends at its max_time_s with the task unfinished: exit 1, saying so.
+  const auto r = run.wait(180s);
+  EXPECT_FALSE(r.timed_out);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("the task did not complete"), std::string::npos) << r.err;
+  EXPECT_TRUE(std::regex_search(r.err, std::regex("run-system: recorded \\d+ messages"))) << r.err;
+  recorder.signal(SIGINT);
+  const auto rec = recorder.wait(30s);
+  EXPECT_EQ(rec.exit_code, 0) << rec.err;
+
+  // Nothing left behind on the host: the veth pair is gone.
+  const auto links = testing::run({"ip", "-o", "link", "show"});
+  EXPECT_EQ(links.out.find("tsys" + std::to_string(run.pid()) + "@"), std::string::npos)
+      << links.out;
+
+  // From the host: frames of both fingertips, events and truth, each from its endpoint.
+  const auto from_host = read_log(host);
+  EXPECT_EQ(from_host.end, recording::ReadStatus::kEnd);
+  const auto count = [](const tools_test::LogContents& c, const std::string& topic) {
+    const auto it = c.per_topic.find(topic);
+    return it == c.per_topic.end() ? 0 : it->second;
+  };
+  // 8 s of frames at 30 fps or more; the grasp's events.
+  for (const std::string topic : {"frame/left", "frame/right", "truth"})
+    EXPECT_GT(count(from_host, topic), 50) << topic;
+  EXPECT_GE(count(from_host, "event"), 3);
+  for (const auto& record : from_host.records) {
+    const std::string& t = record.topic();
+    const std::string expected = t.starts_with("frame/") || t.starts_with("stats/") ? m[1]
+                                 : t == "truth"                                     ? m[3]
+                                                                                    : m[2];
+    ASSERT_EQ(record.source(), expected) << t;
+  }
+
+  // run-system's own recording: whole, every topic, raw frames too, ...
+  const auto log = read_log(inside);
+  EXPECT_EQ(log.end, recording::ReadStatus::kEnd);
+  for (const std::string topic : {"frame/left", "frame/right", "raw/left", "raw/right",
+                                  "stats/left", "event", "arm", "command", "truth"})
+    EXPECT_GT(count(log, topic), 0) << topic;
+  // ... which the measurement core measures again bit for bit.
+  const auto config = dir / "out/config";
+  const auto remeasure =
+      testing::run({TACTILE_REPLAY_PATH, inside.string(), "--remeasure",
+                    (config / "left.yaml").string(), (config / "right.yaml").string()},
+                   120s);
+  EXPECT_EQ(remeasure.exit_code, 0) << remeasure.out << remeasure.err;
+  EXPECT_TRUE(
+      std::regex_search(remeasure.out + remeasure.err,
+                        std::regex("left: \\d+ frames measured again, \\d+ identical bit for "
+                                   "bit, 0 differ")))
+      << remeasure.out << remeasure.err;
+}
+
+}  // namespace
+}  // namespace tactile
