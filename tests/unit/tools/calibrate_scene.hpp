@@ -25,11 +25,12 @@ inline constexpr double kRingPolarDeg[] = {0.0, 10.0, 20.0, 30.0};
 
 class RigSensor {
  public:
-  // `refresh_outside_disks`: every pixel noisy in every frame (as a camera's), or the rig's
-  // cheaper default (rig::CameraParams).
+  // What the pixels outside the disks show (rig::CameraParams): fresh noise from the model in
+  // every frame, the rig cameras' live background, or the lockstep runner's first frame.
+  enum class Outside { kFullNoise, kLive, kFrozen };
   explicit RigSensor(int bit_depth = 8, std::uint64_t seed = 7, double noise_sigma = 2.0,
-                     bool refresh_outside_disks = true)
-      : cam_(camera(bit_depth, noise_sigma, refresh_outside_disks)),
+                     Outside outside = Outside::kFullNoise)
+      : cam_(camera(bit_depth, noise_sigma, outside)),
         truth_(rig::make_calibration("left", cam_, opt_, rig_normals())),
         renderer_(truth_, cam_, opt_, seed),
         rng_(seed + 1) {}
@@ -55,11 +56,12 @@ class RigSensor {
   }
 
  private:
-  static rig::CameraParams camera(int bit_depth, double noise_sigma, bool refresh_outside_disks) {
+  static rig::CameraParams camera(int bit_depth, double noise_sigma, Outside outside) {
     rig::CameraParams c;
     c.bit_depth = bit_depth;
     c.noise_sigma = noise_sigma;
-    c.refresh_outside_disks = refresh_outside_disks;
+    c.refresh_outside_disks = outside == Outside::kFullNoise;
+    c.live_background = outside == Outside::kLive;
     return c;
   }
 

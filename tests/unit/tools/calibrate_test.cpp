@@ -111,15 +111,18 @@ TEST(CalibrateLayout, RigSensorAgainstReferencesWithinHundredthsOfAPixelIdsAndNo
 // once made the noise look ten times smaller than it is, and the noise inside the disks then
 // showed as spots (77 "elements" a user found; here, pairs of spots closer than a disk).
 TEST(CalibrateLayout, PixelsThatNeverChangeDoNotHideTheNoise) {
-  RigSensor sensor(8, 7, 2.0, /*refresh_outside_disks=*/false);
-  LayoutInput in;
-  in.references = sensor.references(16);
-  for (int i = 0; i < 8; ++i)
-    in.frames.push_back(sensor.pressed(0.1));
-  const LayoutResult r = find_layout(in, rig_layout_options());
-  EXPECT_EQ(r.calibration.elements.size(), 41u);
-  EXPECT_NEAR(r.noise_sigma, 2.0, 0.15);
-  EXPECT_LT(max_position_error(r.calibration, sensor.truth()), 0.05);
+  for (auto outside : {RigSensor::Outside::kFrozen, RigSensor::Outside::kLive}) {
+    SCOPED_TRACE(outside == RigSensor::Outside::kFrozen ? "frozen" : "live background");
+    RigSensor sensor(8, 7, 2.0, outside);
+    LayoutInput in;
+    in.references = sensor.references(16);
+    for (int i = 0; i < 8; ++i)
+      in.frames.push_back(sensor.pressed(0.1));
+    const LayoutResult r = find_layout(in, rig_layout_options());
+    EXPECT_EQ(r.calibration.elements.size(), 41u);
+    EXPECT_NEAR(r.noise_sigma, 2.0, 0.15);
+    EXPECT_LT(max_position_error(r.calibration, sensor.truth()), 0.05);
+  }
 }
 
 TEST(CalibrateLayout, ASequenceOfPressesFindsEveryElementWhereItsIncrementIs) {
