@@ -182,6 +182,9 @@ struct CurveFitOptions {
   // Refuse when, at a larger applied load, the mean measured value of an element falls below
   // that at a smaller load by more than this fraction of the element's measured range.
   double monotone_tolerance = 0.02;
+  // The curve the fit replaces (the layout's placeholder or an earlier calibration's), if any:
+  // only to say which loads to record when the samples cannot show a direction.
+  std::optional<PiecewiseLinear> present_curve;
 };
 
 struct ElementError {

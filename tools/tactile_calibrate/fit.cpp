@@ -72,6 +72,83 @@ std::string num(double v) {
   return fmt::format("{:.4g}", v);
 }
 
+// v rounded up to `digits` significant digits (positive v).
+double round_up_significant(double v, int digits) {
+  if (!(v > 0)) return v;
+  const double p = std::pow(10.0, digits - 1 - static_cast<int>(std::floor(std::log10(v))));
+  return std::ceil(v * p - 1e-9) / p;
+}
+
+// Refuses a direction (normal, shear x, shear y) the samples cannot show: the measured value
+// does not rise with the applied load beyond its noise (over all elements together: a straight
+// line's slope within 5 of its standard errors of 0, or the rise over the loads' range under 2
+// noise sigmas of one sample). Says what to record instead: loads that move the measured value by
+// 10 of its noise sigmas, from the curve the fit replaces, or else 10 times the largest load here.
+void check_observable(const std::vector<Obs>& obs, const Spec& spec,
+                      const CurveFitOptions& options) {
+  for (int axis = 0; axis < (spec.odd ? 2 : 1); ++axis) {
+    double n = 0;
+    double sa = 0;
+    double sm = 0;
+    double lo = INFINITY;
+    double hi = -INFINITY;
+    for (const Obs& o : obs) {
+      if (o.axis != axis) continue;
+      n += 1;
+      sa += o.applied;
+      sm += o.measured;
+      lo = std::min(lo, o.applied);
+      hi = std::max(hi, o.applied);
+    }
+    if (n < 3) continue;
+    const double ma = sa / n;
+    const double mm = sm / n;
+    double sxx = 0;
+    double sxy = 0;
+    for (const Obs& o : obs) {
+      if (o.axis != axis) continue;
+      sxx += (o.applied - ma) * (o.applied - ma);
+      sxy += (o.applied - ma) * (o.measured - mm);
+    }
+    if (!(sxx > 0)) continue;  // one load level: refused with its own message
+    const double slope = sxy / sxx;
+    double sse = 0;
+    for (const Obs& o : obs) {
+      if (o.axis != axis) continue;
+      const double r = o.measured - mm - slope * (o.applied - ma);
+      sse += r * r;
+    }
+    const double noise = std::sqrt(sse / std::max(n - 2, 1.0));
+    const double se = noise / std::sqrt(sxx);
+    const double rise = slope * (hi - lo);
+    // A clear fall is a flipped axis: check_monotone says so.
+    if (std::abs(slope) >= 5 * se && std::abs(rise) >= 2 * noise) continue;
+    const double largest = std::max(std::abs(lo), std::abs(hi));
+    double need = 0;
+    std::string how;
+    if (options.present_curve && noise > 0) {
+      need = (*options.present_curve)(10 * noise);
+      how = fmt::format("the present {} gives that load for a {} of 10 noise sigmas", spec.curve,
+                        spec.measured);
+    }
+    if (!(need > largest)) {
+      need = 10 * largest;
+      how = "10 times the largest load here";
+    }
+    const char* direction = !spec.odd ? "normal" : axis == 0 ? "shear x" : "shear y";
+    const char* column = !spec.odd ? "fz_N" : axis == 0 ? "fx_N" : "fy_N";
+    throw std::runtime_error(fmt::format(
+        "{}: the {} direction cannot be seen in these samples: applied {} from {} to {} N moved "
+        "the measured {}{} by {}{}, within its noise ({}{} per sample); record frames with {} "
+        "loads of at least {} N{} ({}), at several levels up to the largest the sensor meets in "
+        "use",
+        spec.curve, direction, column, num(lo), num(hi), spec.measured, axis_name(spec, axis),
+        num(rise), spec.measured_unit, num(noise), spec.measured_unit, direction,
+        num(round_up_significant(need, 2)),
+        spec.odd ? (axis == 0 ? " in x, both signs" : " in y, both signs") : "", how));
+  }
+}
+
 // Refuses data whose mean measured value falls as the applied load rises, per element and axis
 // and over all elements together.
 void check_monotone(const std::vector<Obs>& obs, const Spec& spec, double tolerance) {
@@ -166,6 +243,7 @@ CurveFit fit(const std::vector<Obs>& obs, const Spec& spec, const CurveFitOption
                     "different loads are needed",
                     spec.curve, num(levels.begin()->first)));
   }
+  check_observable(obs, spec, options);
   check_monotone(obs, spec, options.monotone_tolerance);
 
   std::sort(loaded_x.begin(), loaded_x.end());

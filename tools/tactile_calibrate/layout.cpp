@@ -68,17 +68,46 @@ Plane difference(const Plane& a, const Plane& b) {
   return d;
 }
 
-// Mean and standard deviation of the values, ignoring those more than 4 sigmas from the mean
-// (spots are the outliers): the noise of an increment image.
-std::pair<double, double> clipped_stats(const std::vector<double>& v) {
+// Which pixels change at all across the frames and references (1) and which hold the same value
+// in every one (0): a part of the image the camera does not see (a mask, a dead region), or a
+// simulator that draws fresh noise only where it is measured. Such pixels carry no noise and
+// would make the noise of an increment look far smaller than it is (docs/calibration.md). With
+// fewer than three images any pixel may repeat by chance: all count as changing.
+using LiveMask = std::vector<std::uint8_t>;
+LiveMask live_pixels(const LayoutInput& in) {
+  const Image& first = in.frames.front();
+  LiveMask live(static_cast<std::size_t>(first.width()) * static_cast<std::size_t>(first.height()),
+                1);
+  if (in.frames.size() + in.references.size() < 3) return live;
+  std::fill(live.begin(), live.end(), 0);
+  const ImageView base = first.view();
+  for (const auto* list : {&in.frames, &in.references}) {
+    for (const Image& img : *list) {
+      const ImageView v = img.view();
+      std::size_t i = 0;
+      for (int y = 0; y < first.height(); ++y)
+        for (int x = 0; x < first.width(); ++x, ++i)
+          live[i] = live[i] | static_cast<std::uint8_t>(v.at(x, y) != base.at(x, y));
+    }
+  }
+  // An image with no pixel changing at all: nothing to learn from the mask.
+  if (std::find(live.begin(), live.end(), std::uint8_t{1}) == live.end())
+    std::fill(live.begin(), live.end(), 1);
+  return live;
+}
+
+// Mean and standard deviation of the values where `live` is set, ignoring those more than 4
+// sigmas from the mean (spots are the outliers): the noise of an increment image.
+std::pair<double, double> clipped_stats(const std::vector<double>& v, const LiveMask& live) {
   double mean = 0;
   double sd = INFINITY;
   for (int iter = 0; iter < 6; ++iter) {
     double s = 0;
     double s2 = 0;
     std::size_t n = 0;
-    for (double x : v) {
-      if (std::abs(x - mean) > 4 * sd) continue;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      const double x = v[i];
+      if (!live[i] || std::abs(x - mean) > 4 * sd) continue;
       s += x;
       s2 += x * x;
       ++n;
@@ -174,9 +203,10 @@ struct Detection {
   double strength = 0;  // summed positive increment over the spot's area
 };
 
-std::vector<Detection> detect(const Plane& inc, const LayoutOptions& o, double min_strength) {
+std::vector<Detection> detect(const Plane& inc, const LiveMask& live, const LayoutOptions& o,
+                              double min_strength) {
   const Plane s = smooth(inc);
-  const auto [mean, sd] = clipped_stats(s.v);
+  const auto [mean, sd] = clipped_stats(s.v, live);
   const double low = mean + 3 * std::max(sd, 1e-9);
   const double high = mean + o.detect_sigmas * std::max(sd, 1e-9);
   std::vector<std::uint8_t> seen(s.v.size(), 0);
@@ -365,7 +395,7 @@ Plane no_load_plane(const LayoutInput& in) {
 
 // One frame's noise: from two frames of the same kind when there are two, else from a frame
 // against the reference (spots are clipped as outliers).
-double frame_noise(const LayoutInput& in, const Plane& reference) {
+double frame_noise(const LayoutInput& in, const Plane& reference, const LiveMask& live) {
   Plane d;
   double factor = std::sqrt(0.5);
   if (in.references.size() >= 2) {
@@ -378,7 +408,7 @@ double frame_noise(const LayoutInput& in, const Plane& reference) {
     d = difference(to_plane(in.frames[0]), reference);
     factor = 1.0;
   }
-  return factor * clipped_stats(d.v).second;
+  return factor * clipped_stats(d.v, live).second;
 }
 
 // The calibration without elements: thresholds scaled to the noise unless given.
@@ -403,13 +433,13 @@ Calibration thresholds_for(const Image& first, const LayoutOptions& o, double no
 
 // Spots: each frame's increment (or, without references, the mean frame's) searched for spots;
 // detections close together are one element. `preview` gets the largest increment seen.
-std::vector<Cluster> find_spots(const LayoutInput& in, const LayoutOptions& o,
+std::vector<Cluster> find_spots(const LayoutInput& in, const LiveMask& live, const LayoutOptions& o,
                                 const Plane& reference, double min_strength,
                                 FrameProgress& progress, Plane& preview) {
   std::vector<Cluster> clusters;
   if (in.references.empty()) {
     preview = difference(mean_of(in.frames), reference);
-    add_detections(clusters, detect(preview, o, min_strength), o.merge_px);
+    add_detections(clusters, detect(preview, live, o, min_strength), o.merge_px);
     progress.advance(in.frames.size());
     return clusters;
   }
@@ -419,7 +449,7 @@ std::vector<Cluster> find_spots(const LayoutInput& in, const LayoutOptions& o,
     const Plane inc = difference(to_plane(f), reference);
     for (std::size_t i = 0; i < inc.v.size(); ++i)
       preview.v[i] = std::max(preview.v[i], inc.v[i]);
-    add_detections(clusters, detect(inc, o, min_strength), o.merge_px);
+    add_detections(clusters, detect(inc, live, o, min_strength), o.merge_px);
     progress.advance();
   }
   return clusters;
@@ -725,12 +755,13 @@ LayoutResult find_layout(const LayoutInput& in, const LayoutOptions& o, const Pr
 
   LayoutResult result;
   const Plane reference = no_load_plane(in);
-  result.noise_sigma = frame_noise(in, reference);
+  const LiveMask live = live_pixels(in);
+  result.noise_sigma = frame_noise(in, reference, live);
   Calibration cal = thresholds_for(in.frames.front(), o, result.noise_sigma);
 
   Plane preview;
   const std::vector<Cluster> clusters =
-      find_spots(in, o, reference, cal.contact_off, frames, preview);
+      find_spots(in, live, o, reference, cal.contact_off, frames, preview);
   result.increment_preview = to_preview(preview);
   check_count(clusters, o);
   const double radius = disk_radius(clusters, o, cal);

@@ -276,8 +276,8 @@ struct FitArgs {
   std::string calibration;
   std::vector<std::string> samples;
   std::string output;
-  cal::CurveFitOptions normal{4, 0, 0.02};
-  cal::CurveFitOptions shear{3, 0, 0.02};
+  cal::CurveFitOptions normal{4, 0, 0.02, {}};
+  cal::CurveFitOptions shear{3, 0, 0.02, {}};
   double monotone_tolerance = 0.02;
   bool normal_only = false;
   bool shear_only = false;
@@ -366,6 +366,8 @@ int run_fit(FitArgs& a) {
       throw refuse(e.what());
     }
   };
+  a.normal.present_curve = c.normal_curve;
+  a.shear.present_curve = c.shear_curve;
   std::string problem;
   if (!a.shear_only) {
     const cal::CurveFit g = fitted(cal::fit_normal_curve, a.normal);

@@ -100,7 +100,10 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   rep.physics_step_s = dt;
 
   const auto normals = world.element_normals();
-  SimulatedSensors sensors(sc, sc.camera, normals);
+  // Only the measurement sees these images, and it reads only the disks: no live background.
+  CameraParams camera = sc.camera;
+  camera.live_background = false;
+  SimulatedSensors sensors(sc, camera, normals);
   result.calibrations = sensors.calibrations();
   std::vector<Extractor> extractors;
   for (std::size_t i = 0; i < kFingertips; ++i) {

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <stdexcept>
 
@@ -110,6 +111,32 @@ Renderer::Renderer(const Calibration& cal, const CameraParams& cam, const Sensor
     for (int x = 0; x < cam_.width; ++x)
       background_[static_cast<std::size_t>(y) * static_cast<std::size_t>(cam_.width) +
                   static_cast<std::size_t>(x)] = static_cast<float>(background_at(x, y));
+
+  // The background bank (CameraParams::refresh_outside_disks), from its own generator.
+  bank_rng_.reseed(noise_seed ^ 0xB4C6'0F5E'2A17'93D1ULL);
+  const std::size_t pixels = background_.size();
+  const std::size_t pixel_bytes = cam_.bit_depth == 16 ? 2 : 1;
+  const std::size_t bank =
+      cam_.live_background && !cam_.refresh_outside_disks ? kBackgroundBank : 0;
+  background_bank_.resize(bank * pixels * pixel_bytes);
+  for (std::size_t f = 0; f < bank; ++f) {
+    for (int y = 0; y < cam_.height; ++y) {
+      std::size_t o = bank_rng_.below(kPoolSize - static_cast<std::size_t>(cam_.width));
+      for (int x = 0; x < cam_.width; ++x, ++o) {
+        const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(cam_.width) +
+                              static_cast<std::size_t>(x);
+        const double bg = static_cast<double>(background_[i]);
+        const double v = std::clamp(
+            std::nearbyint(bg + pixel_sigma(bg) * static_cast<double>(pool_[o])), 0.0, max_level_);
+        if (pixel_bytes == 1) {
+          background_bank_[f * pixels + i] = static_cast<std::uint8_t>(v);
+        } else {
+          const auto p16 = static_cast<std::uint16_t>(v);
+          std::memcpy(background_bank_.data() + 2 * (f * pixels + i), &p16, 2);
+        }
+      }
+    }
+  }
 
   std::size_t offset = 0;
   for (const ElementCalibration& e : cal_.elements) {
@@ -268,6 +295,17 @@ void Renderer::render(std::span<const ElementLoad> loads, util::Random& rng, Ima
                          pixel_sigma(static_cast<double>(bg[x])) * static_cast<double>(pool_[o])));
     }
     first_ = false;
+  } else if (!background_bank_.empty()) {
+    // A live background: each row from one of the bank's frames (the disks are drawn over it).
+    const std::size_t row_bytes = out.stride_bytes();
+    const std::size_t frame_bytes = row_bytes * static_cast<std::size_t>(cam_.height);
+    std::uint8_t* dst = out.bytes().data();
+    for (int y = 0; y < cam_.height; ++y) {
+      const std::size_t row = static_cast<std::size_t>(y) * row_bytes;
+      std::memcpy(dst + row,
+                  background_bank_.data() + bank_rng_.below(kBackgroundBank) * frame_bytes + row,
+                  row_bytes);
+    }
   }
   redrawn_ = 0;
   for (std::size_t k = 0; k < boxes_.size(); ++k) {

@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -254,6 +256,106 @@ TEST(CalibrateCliHelp, HelpListsTheStepsAndExitsZero) {
   const auto f = testing::run({kCalibrate, "fit", "--help"});
   EXPECT_EQ(f.exit_code, 0);
   EXPECT_THAT(f.out, HasSubstr("--max-rms-normal"));
+}
+
+// --- the sample calibration set (tests/data/calibration) and its walk-through -----------------
+
+const std::filesystem::path kSample =
+    std::filesystem::path(TACTILE_SOURCE_DIR) / "tests/data/calibration";
+
+// The files the generator writes (the set without its walk-through script and README).
+std::vector<std::filesystem::path> generated_files(const std::filesystem::path& dir) {
+  std::vector<std::filesystem::path> out;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir)) {
+    if (!e.is_regular_file()) continue;
+    const auto name = e.path().filename().string();
+    if (name == "walkthrough.sh" || name == "README.md") continue;
+    out.push_back(std::filesystem::relative(e.path(), dir));
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST(CalibrationSample, IsExactlyWhatTheGeneratorWrites) {
+  testing::TempDir dir;
+  const auto r = testing::run({TACTILE_MAKE_CALIBRATION_SAMPLE_PATH, dir.path().string()});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  const auto written = generated_files(dir.path());
+  EXPECT_EQ(written, generated_files(kSample));
+  EXPECT_EQ(written.size(), 16u);  // 4 references, a press, 9 loaded frames, loads, truth
+  std::uintmax_t bytes = 0;
+  for (const auto& f : written) {
+    EXPECT_EQ(read_text(dir / f.string()), read_text(kSample / f)) << f;
+    bytes += std::filesystem::file_size(kSample / f);
+  }
+  EXPECT_LT(bytes, 2'000'000u);
+}
+
+// docs/calibration.md's walk-through, its exact commands (walkthrough.sh), on a copy of the set:
+// 41 elements where the rig put them, curves within 0.03 N (normal) and 0.01 N (shear) of the
+// rig's true ones over the loaded range, and the check step's forces near the applied loads.
+TEST(CalibrationSample, TheWalkThroughRunsEndToEndAndRecoversTheRigsSensor) {
+  testing::TempDir dir;
+  std::filesystem::copy(kSample, dir.path(), std::filesystem::copy_options::recursive);
+  const auto r =
+      testing::run({"/bin/sh", "-c", "cd \"$0\" && PATH=\"$1:$2:$PATH\" exec sh walkthrough.sh",
+                    dir.path().string(), std::filesystem::path(kCalibrate).parent_path().string(),
+                    std::filesystem::path(TACTILE_EXTRACT_PATH).parent_path().string()},
+                   std::chrono::seconds(60));
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_THAT(r.out, HasSubstr("41 elements in 4 rings (1, 8, 16, 16)"));
+  EXPECT_THAT(r.out, HasSubstr("frame 0 at 0.000 s: 41 of 41 elements in contact"));
+
+  const Calibration t = config::load_calibration(dir / "truth.yaml");
+  const Calibration c = config::load_calibration(dir / "left.yaml");
+  ASSERT_EQ(c.elements.size(), 41u);
+  for (std::size_t i = 0; i < 41; ++i) {
+    EXPECT_EQ(c.elements[i].id, t.elements[i].id);
+    EXPECT_LT(norm(c.elements[i].zero_px - t.elements[i].zero_px), 0.05) << i;
+    EXPECT_LT(norm(c.elements[i].normal - t.elements[i].normal), 1e-3) << i;
+  }
+  double worst_normal = 0;
+  double worst_shear = 0;
+  for (int i = 0; i <= 20; ++i) {
+    const double G = 700 + (14000 - 700) * i / 20.0;  // the G of 0.1 to 2 N
+    worst_normal = std::max(worst_normal, std::abs(c.normal_curve(G) - t.normal_curve(G)));
+    const double u = 0.054 * i / 20.0;  // the u of 0 to 0.25 N
+    worst_shear = std::max(worst_shear, std::abs(c.shear_curve(u) - t.shear_curve(u)));
+  }
+  std::printf("sample set: fitted curves within %.4f N (normal) and %.4f N (shear) of the truth\n",
+              worst_normal, worst_shear);
+  EXPECT_LT(worst_normal, 0.03);
+  EXPECT_LT(worst_shear, 0.01);
+
+  // The check step: the table's forces for loaded/f04.pgm against its rows of loads.csv.
+  std::map<std::uint32_t, std::array<double, 3>> applied;
+  std::istringstream loads(read_text(dir / "loads.csv"));
+  std::string line;
+  while (std::getline(loads, line)) {
+    if (line.rfind("loaded/f04.pgm,", 0) != 0) continue;
+    std::uint32_t id = 0;
+    std::array<double, 3> f{};
+    ASSERT_EQ(std::sscanf(line.c_str() + 15, "%u,%lf,%lf,%lf", &id, &f[0], &f[1], &f[2]), 4);
+    applied[id] = f;
+  }
+  ASSERT_EQ(applied.size(), 41u);
+  std::istringstream table(r.out.substr(r.out.find("frame 0 at")));
+  std::getline(table, line);  // title
+  std::getline(table, line);  // header
+  int rows = 0;
+  while (std::getline(table, line)) {
+    std::uint32_t id = 0;
+    double v[10];
+    if (std::sscanf(line.c_str(), "%u %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", &id, &v[0], &v[1],
+                    &v[2], &v[3], &v[4], &v[5], &v[6], &v[7], &v[8], &v[9]) != 11)
+      continue;
+    ASSERT_TRUE(applied.count(id)) << line;
+    EXPECT_NEAR(v[9], applied[id][0], 0.03) << line;  // fz_N
+    EXPECT_NEAR(v[7], applied[id][1], 0.01) << line;  // fx_N
+    EXPECT_NEAR(v[8], applied[id][2], 0.01) << line;  // fy_N
+    ++rows;
+  }
+  EXPECT_EQ(rows, 41);
 }
 
 }  // namespace

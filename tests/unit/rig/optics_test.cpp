@@ -126,6 +126,73 @@ TEST(Optics, NoiseHasTheStatedStatistics) {
   EXPECT_NEAR(corr / var, 0.0, 0.05);
 }
 
+// The cameras' background outside the disks lives as a camera's does (fresh noise every frame,
+// the vignetted level), and the disks' pixels (all the measurement reads) are the same with it
+// and without it, so it moves no measured figure.
+TEST(Optics, LiveBackgroundOutsideTheDisksLeavesTheDisksAlone) {
+  for (int depth : {8, 16}) {
+    SCOPED_TRACE(depth);
+    CameraParams live;
+    live.bit_depth = depth;
+    CameraParams frozen = live;
+    frozen.live_background = false;
+    const Calibration cal = calibration(live);
+    const double scale = depth == 16 ? 257.0 : 1.0;
+    Renderer rl(cal, live, SensorOpticsParams{}, 5);
+    Renderer rf(cal, frozen, SensorOpticsParams{}, 5);
+    util::Random rng_l(9);
+    util::Random rng_f(9);
+    std::vector<ElementLoad> loads(41, ElementLoad{0.4, 0.01, -0.01});
+    // The disks' bounding squares: the pixels each frame's spots and noise are drawn into.
+    std::vector<bool> in_disk(static_cast<std::size_t>(cal.width * cal.height), false);
+    for (const ElementCalibration& e : cal.elements)
+      for (int y = 0; y < cal.height; ++y)
+        for (int x = 0; x < cal.width; ++x)
+          if (std::abs(x - e.center_px.x) <= e.radius_px + 2 &&
+              std::abs(y - e.center_px.y) <= e.radius_px + 2)
+            in_disk[static_cast<std::size_t>(y * cal.width + x)] = true;
+    Image l0;
+    Image l1;
+    Image f1;
+    rl.render(loads, rng_l, l0);
+    Image f0;
+    rf.render(loads, rng_f, f0);
+    l1 = l0;
+    rl.render(loads, rng_l, l1);
+    f1 = f0;
+    rf.render(loads, rng_f, f1);
+    double s = 0;
+    double s2 = 0;
+    double level = 0;
+    int n = 0;
+    int zero = 0;
+    int frozen_changed = 0;
+    for (int y = 0; y < cal.height; ++y) {
+      for (int x = 0; x < cal.width; ++x) {
+        if (in_disk[static_cast<std::size_t>(y * cal.width + x)]) {
+          ASSERT_EQ(l1.view().at(x, y), f1.view().at(x, y)) << x << "," << y;
+          continue;
+        }
+        const double d = (static_cast<double>(l1.view().at(x, y)) - l0.view().at(x, y)) / scale;
+        s += d;
+        s2 += d * d;
+        zero += d == 0 ? 1 : 0;
+        level += static_cast<double>(l1.view().at(x, y)) / scale;
+        ++n;
+        // Without the live background nothing outside the disks changes.
+        frozen_changed += f1.view().at(x, y) != f0.view().at(x, y) ? 1 : 0;
+      }
+    }
+    EXPECT_EQ(frozen_changed, 0);
+    const double sd = std::sqrt(s2 / n - (s / n) * (s / n));
+    // Two frames' difference: sqrt(2) x the read noise of 2 (rounding adds 1/12 per frame for
+    // 8-bit; a pixel repeats its bank row 1 time in 16).
+    EXPECT_NEAR(sd, std::sqrt(2.0 * (4.0 + (depth == 8 ? 1.0 / 12 : 0.0)) * 15.0 / 16.0), 0.1);
+    EXPECT_LT(static_cast<double>(zero) / n, 0.25);
+    EXPECT_NEAR(level / n, rl.background_at(319.5, 239.5) * (1 - 0.35 * 0.4) / scale, 3.0);
+  }
+}
+
 TEST(Optics, OnlyChangedSpotsAreRedrawn) {
   CameraParams cam;
   const Calibration cal = calibration(cam);

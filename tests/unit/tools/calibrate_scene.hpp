@@ -25,19 +25,23 @@ inline constexpr double kRingPolarDeg[] = {0.0, 10.0, 20.0, 30.0};
 
 class RigSensor {
  public:
-  explicit RigSensor(int bit_depth = 8, std::uint64_t seed = 7, double noise_sigma = 2.0)
-      : cam_(camera(bit_depth, noise_sigma)),
+  // What the pixels outside the disks show (rig::CameraParams): fresh noise from the model in
+  // every frame, the rig cameras' live background, or the lockstep runner's first frame.
+  enum class Outside { kFullNoise, kLive, kFrozen };
+  explicit RigSensor(int bit_depth = 8, std::uint64_t seed = 7, double noise_sigma = 2.0,
+                     Outside outside = Outside::kFullNoise)
+      : cam_(camera(bit_depth, noise_sigma, outside)),
         truth_(rig::make_calibration("left", cam_, opt_, rig_normals())),
         renderer_(truth_, cam_, opt_, seed),
         rng_(seed + 1) {}
 
   const Calibration& truth() const { return truth_; }
 
-  // One frame with these loads (element k of the calibration gets loads[k]).
+  // One frame with these loads (element k of the calibration gets loads[k]). Rendered into the
+  // same image every time, as the rig does (what the renderer leaves alone stays as it was).
   Image frame(std::span<const rig::ElementLoad> loads) {
-    Image out;
-    renderer_.render(loads, rng_, out);
-    return out;
+    renderer_.render(loads, rng_, image_);
+    return image_;
   }
   // Every element pressed with the same normal load, no shear.
   Image pressed(double fz_n) {
@@ -52,11 +56,12 @@ class RigSensor {
   }
 
  private:
-  static rig::CameraParams camera(int bit_depth, double noise_sigma) {
+  static rig::CameraParams camera(int bit_depth, double noise_sigma, Outside outside) {
     rig::CameraParams c;
     c.bit_depth = bit_depth;
     c.noise_sigma = noise_sigma;
-    c.refresh_outside_disks = true;  // every pixel noisy in every frame, as a camera's
+    c.refresh_outside_disks = outside == Outside::kFullNoise;
+    c.live_background = outside == Outside::kLive;
     return c;
   }
 
@@ -65,6 +70,7 @@ class RigSensor {
   Calibration truth_;
   rig::Renderer renderer_;
   util::Random rng_;
+  Image image_;
 };
 
 // The signed shear displacement (mm) the rig's optics show for an applied shear force.

@@ -106,6 +106,25 @@ TEST(CalibrateLayout, RigSensorAgainstReferencesWithinHundredthsOfAPixelIdsAndNo
   }
 }
 
+// Pixels that never change (the same value in every frame and reference: a region the camera
+// does not see, or a simulator that draws noise only where it is measured) carry no noise: they
+// once made the noise look ten times smaller than it is, and the noise inside the disks then
+// showed as spots (77 "elements" a user found; here, pairs of spots closer than a disk).
+TEST(CalibrateLayout, PixelsThatNeverChangeDoNotHideTheNoise) {
+  for (auto outside : {RigSensor::Outside::kFrozen, RigSensor::Outside::kLive}) {
+    SCOPED_TRACE(outside == RigSensor::Outside::kFrozen ? "frozen" : "live background");
+    RigSensor sensor(8, 7, 2.0, outside);
+    LayoutInput in;
+    in.references = sensor.references(16);
+    for (int i = 0; i < 8; ++i)
+      in.frames.push_back(sensor.pressed(0.1));
+    const LayoutResult r = find_layout(in, rig_layout_options());
+    EXPECT_EQ(r.calibration.elements.size(), 41u);
+    EXPECT_NEAR(r.noise_sigma, 2.0, 0.15);
+    EXPECT_LT(max_position_error(r.calibration, sensor.truth()), 0.05);
+  }
+}
+
 TEST(CalibrateLayout, ASequenceOfPressesFindsEveryElementWhereItsIncrementIs) {
   RigSensor sensor;
   LayoutInput in;
@@ -315,8 +334,8 @@ TEST(CalibrateFit, RecoversTheRigsCurvesFromFramesUnderKnownLoads) {
     for (const Sample& s : samples)
       EXPECT_TRUE(s.contact) << s.where;
 
-    const CurveFit g = fit_normal_curve(samples, {4, 0, 0.02});
-    const CurveFit f = fit_shear_curve(samples, {3, 0, 0.02});
+    const CurveFit g = fit_normal_curve(samples, {4, 0, 0.02, {}});
+    const CurveFit f = fit_shear_curve(samples, {3, 0, 0.02, {}});
     EXPECT_EQ(g.problem, "");
     EXPECT_EQ(f.problem, "");
     const Calibration& t = sensor.truth();
@@ -367,12 +386,12 @@ std::vector<Sample> clean_samples(int elements, int levels) {
 
 TEST(CalibrateFit, ExactLinearDataGiveTheLineAndZeroError) {
   const auto samples = clean_samples(3, 8);
-  const CurveFit g = fit_normal_curve(samples, {4, 0, 0.02});
+  const CurveFit g = fit_normal_curve(samples, {4, 0, 0.02, {}});
   EXPECT_LT(g.all.max_n, 1e-6);
   EXPECT_NEAR(g.curve(4321.0), 4321.0 / 5000.0, 1e-6);
   EXPECT_EQ(g.curve.x().front(), 0.0);
   EXPECT_EQ(g.curve.y().front(), 0.0);
-  const CurveFit f = fit_shear_curve(samples, {3, 0, 0.02});
+  const CurveFit f = fit_shear_curve(samples, {3, 0, 0.02, {}});
   EXPECT_LT(f.all.max_n, 1e-6);
   EXPECT_NEAR(f.curve.odd(-0.03), -0.15, 1e-6);
 }
@@ -382,7 +401,7 @@ TEST(CalibrateFit, RefusesNonMonotoneDataTooFewPointsAndALargeError) {
   // Element 4's G falls at its two largest loads.
   for (Sample& s : samples)
     if (s.element == 4 && s.fz_n > 1.3) s.G = 5000.0 - 1000.0 * (s.fz_n - 1.2);
-  const std::string mono = refusal([&] { fit_normal_curve(samples, {4, 0, 0.02}); });
+  const std::string mono = refusal([&] { fit_normal_curve(samples, {4, 0, 0.02, {}}); });
   EXPECT_THAT(mono, HasSubstr("normal curve: the data are not monotone: for element 4"));
   EXPECT_THAT(mono, HasSubstr("falls from"));
 
@@ -390,7 +409,7 @@ TEST(CalibrateFit, RefusesNonMonotoneDataTooFewPointsAndALargeError) {
   samples = clean_samples(6, 8);
   for (Sample& s : samples)
     s.ux_mm = -s.ux_mm;
-  const std::string flipped = refusal([&] { fit_shear_curve(samples, {3, 0, 0.02}); });
+  const std::string flipped = refusal([&] { fit_shear_curve(samples, {3, 0, 0.02, {}}); });
   EXPECT_THAT(flipped, HasSubstr("shear curve: the data are not monotone"));
   EXPECT_THAT(flipped, HasSubstr("along x"));
   EXPECT_THAT(flipped, HasSubstr("flipped"));
@@ -398,13 +417,13 @@ TEST(CalibrateFit, RefusesNonMonotoneDataTooFewPointsAndALargeError) {
   // Too few points for the knots, and one load only.
   samples = clean_samples(1, 5);
   EXPECT_THAT(refusal([&] {
-                fit_normal_curve(samples, {4, 0, 0.02});
+                fit_normal_curve(samples, {4, 0, 0.02, {}});
               }),
               HasSubstr("normal curve: too few points: 5 samples with a load, at least 8 are "
                         "needed for 4 knots (--normal-knots)"));
   samples = clean_samples(9, 1);
   EXPECT_THAT(refusal([&] {
-                fit_normal_curve(samples, {2, 0, 0.02});
+                fit_normal_curve(samples, {2, 0, 0.02, {}});
               }),
               HasSubstr("at least 2 different loads"));
 
@@ -412,19 +431,55 @@ TEST(CalibrateFit, RefusesNonMonotoneDataTooFewPointsAndALargeError) {
   samples = clean_samples(3, 8);
   for (Sample& s : samples)
     s.has_x = false;
-  EXPECT_THAT(refusal([&] { fit_shear_curve(samples, {3, 0, 0.02}); }), HasSubstr("--normal-only"));
+  EXPECT_THAT(refusal([&] {
+                fit_shear_curve(samples, {3, 0, 0.02, {}});
+              }),
+              HasSubstr("--normal-only"));
 
   // Element 3 is 40 % more sensitive than the others: monotone, but one curve cannot fit it.
   samples = clean_samples(6, 8);
   for (Sample& s : samples)
     if (s.element == 3) s.G *= 1.4;
-  const CurveFit bad = fit_normal_curve(samples, {4, 0, 0.02});
+  const CurveFit bad = fit_normal_curve(samples, {4, 0, 0.02, {}});
   EXPECT_THAT(bad.problem,
               HasSubstr("normal curve: the fit error is too large: element 3 has RMS"));
   EXPECT_THAT(bad.problem, HasSubstr("above the default limit (5 % of the largest load) 0.08 N"));
-  const CurveFit loose = fit_normal_curve(samples, {4, 1.0, 0.02});
+  const CurveFit loose = fit_normal_curve(samples, {4, 1.0, 0.02, {}});
   EXPECT_EQ(loose.problem, "");
   EXPECT_DOUBLE_EQ(loose.max_rms_n, 1.0);
+}
+
+// Shear loads at the noise level: the message names the direction, the loads seen and what to
+// record, from the curve the fit replaces (or 10 times the largest load without one).
+TEST(CalibrateFit, AnUnobservableDirectionSaysWhatToRecord) {
+  auto samples = clean_samples(6, 8);
+  util::Random rng(5);
+  for (Sample& s : samples) {
+    s.fx_n = 0.002 * (static_cast<double>(s.fz_n / 0.2) - 4);  // -0.006 to 0.008 N
+    s.ux_mm = 0.004 * rng.normal();                            // the centroid's noise only
+  }
+  CurveFitOptions o{3, 0, 0.02, {}};
+  o.present_curve = PiecewiseLinear({0, 0.02, 0.08}, {0, 0.05, 0.4});
+  const std::string msg = refusal([&] { fit_shear_curve(samples, o); });
+  std::printf("%s\n", msg.c_str());
+  EXPECT_THAT(msg,
+              HasSubstr("shear curve: the shear x direction cannot be seen in these samples: "
+                        "applied fx_N from -0.006 to 0.008 N moved the measured u along x by"));
+  EXPECT_THAT(msg, HasSubstr("record frames with shear x loads of at least"));
+  EXPECT_THAT(msg, HasSubstr("N in x, both signs (the present shear curve gives that load"));
+  o.present_curve.reset();
+  EXPECT_THAT(refusal([&] { fit_shear_curve(samples, o); }),
+              HasSubstr("at least 0.08 N in x, both signs (10 times the largest load here)"));
+
+  // Normal loads that all sit below contact: G at the noise level.
+  samples = clean_samples(6, 8);
+  for (Sample& s : samples)
+    s.G = 30 + 10 * rng.normal();
+  EXPECT_THAT(refusal([&] {
+                fit_normal_curve(samples, {4, 0, 0.02, {}});
+              }),
+              HasSubstr("normal curve: the normal direction cannot be seen in these samples: "
+                        "applied fz_N from 0.2 to 1.6 N"));
 }
 
 TEST(CalibrateFit, NonNegativeLeastSquaresMatchesTheKnownSolution) {

@@ -27,9 +27,17 @@ struct CameraParams {
   double shot_noise_gain = 0.0;  // electrons per 8-bit gray level; 0: no shot noise
   double background = 40.0;      // gray level at the image centre (8-bit units)
   double vignetting = 0.35;      // fractional fall-off of the background at the corners
-  // Re-noise every pixel of every frame (a real-time camera stream); otherwise only the pixels
-  // of the 41 measurement disks get fresh noise each frame (nothing else is ever read).
+  // Re-noise every pixel of every frame from the noise model (costly: a real-time camera stream
+  // with --full-noise). Otherwise the 41 measurement disks get fresh noise each frame, and the
+  // rest of the image is:
+  // - with live_background, copied row by row from one of kBackgroundBank noisy background
+  //   frames drawn once, each row's frame picked at random: a live background as a camera shows
+  //   it through the acrylic, at the cost of a copy (the images anyone sees: the cameras);
+  // - without, the first frame's, unchanged (the lockstep runner, where only the measurement
+  //   reads the images, and it reads only the disks).
+  // The disks' pixels are the same in all three: the measurement's figures do not depend on it.
   bool refresh_outside_disks = false;
+  bool live_background = true;
 };
 
 struct SensorOpticsParams {
@@ -67,6 +75,9 @@ struct ElementLoad {
   double ux_mm = 0;
   double uy_mm = 0;
 };
+
+// Noisy background frames the renderer draws once and copies rows from (CameraParams).
+inline constexpr std::size_t kBackgroundBank = 16;
 
 class Renderer {
  public:
@@ -116,6 +127,10 @@ class Renderer {
   std::vector<double> strength_grid_;
   std::vector<std::vector<double>> g_table_;
   std::vector<float> background_;
+  // kBackgroundBank noisy background frames, rows of output pixels, and the generator that picks
+  // a row from them: apart from the disks' noise, so the disks' pixels do not depend on it.
+  std::vector<std::uint8_t> background_bank_;
+  util::Random bank_rng_;
   bool first_ = true;
   std::size_t redrawn_ = 0;
 };
