@@ -252,7 +252,15 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 2));
   app.add_option("--format", s.format, "Mono8 or Mono16");
   app.add_option("--packet-size", s.packet_size, "GVSP packet size")->check(CLI::Range(576, 65500));
-  CLI11_PARSE(app, argc, argv);
+  // Usage errors exit 2 and --help 0, as every program's (docs/tools.md, "Exit status"); CLI11's
+  // own codes (CLI11_PARSE) differ by error.
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "tactile_camera_latency_bench: %s (try --help)\n", e.what());
+    return 2;
+  }
   try {
     return tactile::camera::run(s);
   } catch (const std::exception& e) {

@@ -97,7 +97,15 @@ int run(int argc, char** argv) {
   bool no_slips = false;
   app.add_flag("--no-accuracy", no_accuracy, "skip the accuracy grid");
   app.add_flag("--no-slips", no_slips, "skip the slip statistics");
-  CLI11_PARSE(app, argc, argv);
+  // Usage errors exit 2 and --help 0, as every program's (docs/tools.md, "Exit status"); CLI11's
+  // own codes (CLI11_PARSE) differ by error.
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "extraction_accuracy: %s (try --help)\n", e.what());
+    return 2;
+  }
   if (quick) {
     frames = 120;
     slip_frames = 600;

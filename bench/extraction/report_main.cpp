@@ -156,7 +156,15 @@ int run(int argc, char** argv) {
   std::string out;
   app.add_option("--in", in, "directory with the benchmark outputs")->capture_default_str();
   app.add_option("--out", out, "output directory (default: --in)");
-  CLI11_PARSE(app, argc, argv);
+  // Usage errors exit 2 and --help 0, as every program's (docs/tools.md, "Exit status"); CLI11's
+  // own codes (CLI11_PARSE) differ by error.
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "extraction_report: %s (try --help)\n", e.what());
+    return 2;
+  }
   if (out.empty()) out = in;
   const fs::path din(in);
   const fs::path dout(out);

@@ -1906,8 +1906,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1.0, 600.0))
       ->capture_default_str();
   app.add_option("--build", s.build_dir,
-                 "build directory holding rig/rig, sensor_node/sensor_node "
-                 "and hand_node/hand_node")
+                 "build directory holding the built rig, sensor_node and hand_node")
       ->capture_default_str();
   app.add_option("--scenario", s.scenario, "scenario file; its camera fps is replaced by each rate")
       ->check(CLI::ExistingFile)

@@ -10,14 +10,10 @@ namespace tactile::hand {
 HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::string>* warnings) {
   const config::Node root = config::load_yaml_file(path);
   if (!root.is_map()) root.fail("a hand_node configuration must be a YAML mapping");
-  if (warnings != nullptr) {
-    for (const auto& k : root.unknown_keys({"format", "fingertips", "subscribe", "arm", "events",
-                                            "heartbeat_period_s", "control_period_s",
-                                            "arm_timeout_s", "pair_window_s", "start_after_frames",
-                                            "controller", "security", "realtime"})) {
-      warnings->push_back(path.string() + ": unknown key '" + k + "' ignored");
-    }
-  }
+  root.refuse_unknown_keys({"format", "fingertips", "subscribe", "arm", "events",
+                            "heartbeat_period_s", "control_period_s", "arm_timeout_s",
+                            "pair_window_s", "start_after_frames", "controller", "security",
+                            "realtime"});
   const config::Node format = root["format"];
   if (format.as_string() != kHandConfigFormat) {
     format.fail(std::string("must be '") + kHandConfigFormat + "', is " + format.text());
@@ -33,6 +29,7 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
   const auto base = path.parent_path();
   for (std::size_t i = 0; i < control::kFingertips; ++i) {
     const config::Node t = tips.at(i);
+    t.refuse_unknown_keys({"sensor_id", "calibration"});
     FingertipConfig& f = cfg.fingertips[i];
     f.sensor_id = t["sensor_id"].as_string();
     if (f.sensor_id.empty()) t["sensor_id"].fail("must not be empty");
@@ -77,9 +74,9 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
       n->fail("must be a whole number of frames from 1 to 10000, is " + n->text());
     cfg.start_after_frames = static_cast<int>(v);
   }
-  if (auto c = root.find("controller"))
-    cfg.controller = config::parse_controller_config(*c, warnings);
+  if (auto c = root.find("controller")) cfg.controller = config::parse_controller_config(*c);
   if (auto sec = root.find("security")) {
+    sec->refuse_unknown_keys({"secret_key", "sensor_public_key", "arm_public_key"});
     const auto load = [&](const char* key, auto loader) {
       const config::Node n = (*sec)[key];
       try {
@@ -93,7 +90,7 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
         wire::ClientSecurity{own, load("sensor_public_key", wire::load_public_key)};
     cfg.arm_security = wire::ClientSecurity{own, load("arm_public_key", wire::load_public_key)};
   }
-  if (auto rt = root.find("realtime")) cfg.realtime = config::parse_realtime_section(*rt, warnings);
+  if (auto rt = root.find("realtime")) cfg.realtime = config::parse_realtime_section(*rt);
   return cfg;
 }
 

@@ -35,7 +35,8 @@ int run(int argc, char** argv) {
       "the arm controller (ROUTER, tcp://*:5556, with a deadman) and ground truth (tcp://*:5557),\n"
       "for sensor_node and hand_node; the report scores what they measured and decided.\n"
       "  rig --scenario FILE --write-configs DIR\n"
-      "writes the sensors' calibrations and sensor_node/hand_node configurations for it."};
+      "writes the sensors' calibrations and the configurations of sensor_node and hand_node for "
+      "it."};
   std::string scenario_path;
   std::string report_path;
   std::string plots_dir;

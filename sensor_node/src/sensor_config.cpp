@@ -35,13 +35,8 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
                                 const std::filesystem::path& state_dir) {
   const config::Node root = config::load_yaml_file(path);
   if (!root.is_map()) root.fail("a sensor_node configuration must be a YAML mapping");
-  const auto warn = [&](const config::Node& n, std::initializer_list<std::string_view> known) {
-    if (warnings == nullptr) return;
-    for (const auto& k : n.unknown_keys(known))
-      warnings->push_back(path.string() + ": unknown key '" + k + "' ignored");
-  };
-  warn(root, {"format", "publish", "stats_period_s", "raw_frames", "measurement", "cameras",
-              "security", "realtime"});
+  root.refuse_unknown_keys({"format", "publish", "stats_period_s", "raw_frames", "measurement",
+                            "cameras", "security", "realtime"});
   const config::Node format = root["format"];
   if (format.as_string() != kSensorConfigFormat) {
     format.fail(std::string("must be '") + kSensorConfigFormat + "', is " + format.text());
@@ -51,7 +46,8 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
   cfg.stats_period_s = positive(root, "stats_period_s", cfg.stats_period_s);
   cfg.raw_frames = root.get("raw_frames", cfg.raw_frames);
   if (auto m = root.find("measurement")) {
-    warn(*m, {"estimator", "reference_frames", "reference_spot_check", "max_gap_frames"});
+    m->refuse_unknown_keys(
+        {"estimator", "reference_frames", "reference_spot_check", "max_gap_frames"});
     if (auto e = m->find("estimator")) {
       const auto est = parse_estimator(e->as_string());
       if (!est) e->fail("must be plain, thresholded, windowed or gaussian, is " + e->text());
@@ -69,7 +65,7 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
     cfg.measurement.max_gap_frames = static_cast<std::uint32_t>(gap);
   }
   if (auto sec = root.find("security")) {
-    warn(*sec, {"secret_key"});
+    sec->refuse_unknown_keys({"secret_key"});
     const config::Node key = (*sec)["secret_key"];
     try {
       cfg.security =
@@ -78,15 +74,15 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
       key.fail(e.what());
     }
   }
-  if (auto rt = root.find("realtime")) cfg.realtime = config::parse_realtime_section(*rt, warnings);
+  if (auto rt = root.find("realtime")) cfg.realtime = config::parse_realtime_section(*rt);
   const config::Node cams = root["cameras"];
   if (cams.size() == 0) cams.fail("must list at least one camera");
   const auto base = path.parent_path();
   for (std::size_t i = 0; i < cams.size(); ++i) {
     const config::Node c = cams.at(i);
-    warn(c, {"sensor_id", "camera", "calibration", "reference", "reference_cache", "fps",
-             "packet_size", "socket_buffer_bytes", "buffers", "interface", "packet_resend",
-             "frame_timeout_s", "retry_initial_s", "retry_max_s"});
+    c.refuse_unknown_keys({"sensor_id", "camera", "calibration", "reference", "reference_cache",
+                           "fps", "packet_size", "socket_buffer_bytes", "buffers", "interface",
+                           "packet_resend", "frame_timeout_s", "retry_initial_s", "retry_max_s"});
     CameraConfig cc;
     cc.sensor_id = c["sensor_id"].as_string();
     for (const auto& other : cfg.cameras) {

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <ctime>
 #include <numbers>
+#include <string_view>
+#include <utility>
 
 #include "tactile/control/types.hpp"
 #include "tactile/wire/envelope.hpp"
@@ -198,6 +200,34 @@ std::vector<std::array<double, 2>> dome_layout(std::size_t count, const Calibrat
   return out;
 }
 
+ScreenLayout screen_layout(std::span<const FingertipView> fingertips, int width, int height,
+                           int header_lines) {
+  ScreenLayout out;
+  for (std::size_t i = 0; i < fingertips.size(); ++i)
+    out.order.push_back(i);
+  const auto rank = [&](std::size_t i) {
+    const std::string& id = fingertips[i].id;
+    return std::pair(id == "left" ? 0 : (id == "right" ? 2 : 1), std::string_view(id));
+  };
+  std::stable_sort(out.order.begin(), out.order.end(),
+                   [&](std::size_t a, std::size_t b) { return rank(a) < rank(b); });
+  // Room: the header above; a legend, the events' title and at least one event below.
+  const int fixed = header_lines + 3;
+  const int block_rows = 3;  // a fingertip's summary lines above its dome
+  const int n = std::max(static_cast<int>(fingertips.size()), 1);
+  out.block_width = width / n;
+  out.side_by_side = n == 1 || out.block_width >= 30;
+  if (!out.side_by_side) out.block_width = width;
+  const int rows =
+      out.side_by_side ? height - fixed - block_rows - 1 : (height - fixed) / n - block_rows;
+  // The dome is round: two columns per row, so a block's width bounds its rows; rows beyond
+  // that go to the events.
+  const int round = (out.block_width - 4) / 2 + 1;
+  out.grid_rows = std::min(rows, round);
+  if (out.grid_rows < 5) out.grid_rows = 0;  // too small a window: summaries only
+  return out;
+}
+
 std::string event_line(const EventLine& e) {
   return fmt::format("{} {}{}{}", clock_text(e.time_ns, true), e.kind, e.detail.empty() ? "" : " ",
                      e.detail);
@@ -222,26 +252,20 @@ std::string render(const LiveState& s, std::span<const Calibration> cals, const 
   if (s.cycle > 0) l.text(fmt::format("  twist cycle {}", s.cycle));
   lines.push_back(l.take());
 
-  // Room: the header above, a legend and at least two event lines below.
-  const int fixed = static_cast<int>(lines.size()) + 3;
+  const ScreenLayout layout =
+      screen_layout(s.fingertips, width, height, static_cast<int>(lines.size()));
   const int n = static_cast<int>(s.fingertips.size());
-  const int block_w = n > 0 ? std::min(width / std::max(n, 1), 48) : width;
-  const bool side_by_side = n <= 1 || block_w >= 30;
-  const int header_rows = 3;
-  int grid_rows = 0;
-  if (side_by_side) {
-    grid_rows = std::min(13, height - fixed - header_rows - 1);
-  } else {
-    grid_rows = std::min(13, (height - fixed) / std::max(n, 1) - header_rows);
-  }
-  if (grid_rows < 5) grid_rows = 0;  // too small a window: summaries only
+  const int block_w = layout.block_width;
+  const bool side_by_side = layout.side_by_side;
+  const int grid_rows = layout.grid_rows;
 
   if (n == 0) {
     l.text("no TactileFrames yet", "2");
     lines.push_back(l.take());
   } else if (side_by_side) {
     std::vector<std::vector<std::string>> blocks;
-    for (const auto& f : s.fingertips) {
+    for (const std::size_t i : layout.order) {
+      const FingertipView& f = s.fingertips[i];
       blocks.push_back(fingertip_block(f, find_calibration(cals, f.id), block_w - 2, grid_rows,
                                        o.color, o.f2_n));
     }
@@ -274,7 +298,8 @@ std::string render(const LiveState& s, std::span<const Calibration> cals, const 
       lines.push_back(joined);
     }
   } else {
-    for (const auto& f : s.fingertips) {
+    for (const std::size_t i : layout.order) {
+      const FingertipView& f = s.fingertips[i];
       for (auto& line :
            fingertip_block(f, find_calibration(cals, f.id), width, grid_rows, o.color, o.f2_n))
         lines.push_back(std::move(line));

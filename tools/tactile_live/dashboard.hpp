@@ -74,6 +74,20 @@ struct LiveState {
 // paper's 41-element layout).
 std::vector<std::array<double, 2>> dome_layout(std::size_t count, const Calibration* cal);
 
+// Where the fingertips go in a window of `width` x `height` characters below `header_lines`
+// lines of header: a pure function of their ids and the window, so the screen follows a resize
+// at the next redraw.
+struct ScreenLayout {
+  // Indices into the fingertips in drawing order, left to right (or top to bottom): "left"
+  // first and "right" last whatever order their frames arrived in, any other id between, by id.
+  std::vector<std::size_t> order;
+  bool side_by_side = true;
+  int block_width = 0;  // columns of one fingertip's block
+  int grid_rows = 0;    // rows of one dome; 0 when the window is too small (summaries only)
+};
+ScreenLayout screen_layout(std::span<const FingertipView> fingertips, int width, int height,
+                           int header_lines);
+
 struct RenderOptions {
   int width = 80;
   int height = 24;

@@ -50,11 +50,13 @@ Vec3 vec3(const Node& n) {
   return {v[0], v[1], v[2]};
 }
 
-void warn_unknown(const Node& n, std::initializer_list<std::string_view> known,
+// A calibration is a data file meant to cross versions: a key a later version added is warned
+// about (with the closest known key, for a typo) and skipped, not refused.
+void warn_unknown(const Node& n, const std::vector<std::string>& known,
                   std::vector<std::string>* warnings) {
   if (!warnings) return;
-  for (const auto& k : n.unknown_keys(known))
-    warnings->push_back(n.source() + ": unknown key '" + k + "' ignored");
+  for (auto& w : n.unknown_key_warnings(known))
+    warnings->push_back(std::move(w));
 }
 
 int int_in(const Node& n, std::int64_t lo, std::int64_t hi) {

@@ -100,11 +100,12 @@ bool set_controller_field(control::Config& cfg, std::string_view key, double val
   return false;
 }
 
-control::Config parse_controller_config(const Node& section, std::vector<std::string>* warnings) {
+control::Config parse_controller_config(const Node& section) {
   Config cfg;
   if (section.is_null()) return cfg;
   if (!section.is_map())
     section.fail("must be a mapping of controller parameters, is " + section.text());
+  section.refuse_unknown_keys(controller_config_keys());
 
   if (auto t = section.find("task")) {
     const std::string v = t->as_string();
@@ -142,16 +143,6 @@ control::Config parse_controller_config(const Node& section, std::vector<std::st
   }
   if (auto n = section.find("tighten_clockwise")) cfg.tighten_clockwise = n->as_bool();
 
-  if (warnings != nullptr) {
-    const auto keys = controller_config_keys();
-    for (const auto& k : section.unknown_keys({})) {
-      const std::string leaf = k.substr(k.rfind('.') + 1);
-      bool known = false;
-      for (const auto& q : keys)
-        known = known || q == leaf;
-      if (!known) warnings->push_back(section.source() + ": unknown key '" + k + "' ignored");
-    }
-  }
   try {
     cfg.validate();
   } catch (const std::invalid_argument& e) {

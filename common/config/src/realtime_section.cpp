@@ -4,15 +4,11 @@
 
 namespace tactile::config {
 
-util::RealtimeScheduling parse_realtime_section(const Node& section,
-                                                std::vector<std::string>* warnings) {
+util::RealtimeScheduling parse_realtime_section(const Node& section) {
   if (!section.is_map())
     section.fail("must be a mapping such as {priority: 10, lock_memory: true}, is " +
                  section.text());
-  if (warnings != nullptr) {
-    for (const auto& k : section.unknown_keys({"priority", "lock_memory"}))
-      warnings->push_back(section.source() + ": unknown key '" + k + "' ignored");
-  }
+  section.refuse_unknown_keys({"priority", "lock_memory"});
   util::RealtimeScheduling r;
   if (const auto priority = section.find("priority")) {
     const std::int64_t p = priority->as_int();

@@ -1,5 +1,6 @@
 #include "tactile/config/yaml.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "tactile/util/files.hpp"
@@ -141,15 +142,60 @@ std::string Node::get(std::string_view key, const std::string& fallback) const {
   return c ? c->as_string() : fallback;
 }
 
-std::vector<std::string> Node::unknown_keys(std::initializer_list<std::string_view> known) const {
+std::vector<std::string> Node::keys() const {
+  std::vector<std::string> out;
+  if (!node_.IsMap()) return out;
+  for (const auto& kv : node_)
+    out.push_back(kv.first.Scalar());
+  return out;
+}
+
+namespace {
+
+// "<file>:<line>: unknown key '<key>' in '<section>'<verdict> (did you mean '<closest>'?)", or
+// with the known keys listed when none is close.
+std::string unknown_key_message(const std::string& source, const YAML::Node& key,
+                                const std::string& section, const std::vector<std::string>& known,
+                                const char* verdict) {
+  std::string msg = source;
+  if (key.Mark().line >= 0) msg += ":" + std::to_string(key.Mark().line + 1);
+  msg += ": unknown key '" + key.Scalar() + "'";
+  if (!section.empty()) msg += " in '" + section + "'";
+  msg += verdict;
+  const std::string near = util::closest_match(key.Scalar(), known);
+  if (!near.empty()) {
+    msg += " (did you mean '" + near + "'?)";
+  } else if (known.empty()) {
+    msg += " (this section takes no keys)";
+  } else {
+    msg += " (known keys: ";
+    for (std::size_t i = 0; i < known.size(); ++i)
+      msg += (i == 0 ? "" : ", ") + known[i];
+    msg += ")";
+  }
+  return one_line(msg);
+}
+
+bool is_known(const std::string& key, const std::vector<std::string>& known) {
+  return std::find(known.begin(), known.end(), key) != known.end();
+}
+
+}  // namespace
+
+void Node::refuse_unknown_keys(const std::vector<std::string>& known) const {
+  if (!node_.IsMap()) return;
+  for (const auto& kv : node_) {
+    if (!is_known(kv.first.Scalar(), known))
+      throw ConfigError(unknown_key_message(*source_, kv.first, path_, known, ""));
+  }
+}
+
+std::vector<std::string> Node::unknown_key_warnings(const std::vector<std::string>& known) const {
   std::vector<std::string> out;
   if (!node_.IsMap()) return out;
   for (const auto& kv : node_) {
-    const std::string k = kv.first.Scalar();
-    bool found = false;
-    for (std::string_view q : known)
-      found = found || q == k;
-    if (!found) out.push_back(path_.empty() ? k : path_ + "." + k);
+    if (!is_known(kv.first.Scalar(), known))
+      out.push_back(unknown_key_message(*source_, kv.first, path_, known, " ignored"));
   }
   return out;
 }

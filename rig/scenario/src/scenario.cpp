@@ -1,7 +1,6 @@
 #include "tactile/rig/scenario.hpp"
 
 #include <cmath>
-#include <initializer_list>
 #include <numbers>
 #include <string_view>
 
@@ -19,14 +18,6 @@ std::string number_text(double v) {
     s.pop_back();
   if (!s.empty() && s.back() == '.') s.pop_back();
   return s;
-}
-
-void refuse_unknown(const Node& section, std::initializer_list<std::string_view> known) {
-  for (const std::string& path : section.unknown_keys(known)) {
-    const std::string key =
-        path.substr(path.rfind('.') == std::string::npos ? 0 : path.rfind('.') + 1);
-    section[key].fail("unknown key (see docs/rig.md for the scenario keys)");
-  }
 }
 
 double checked(const Node& n, double lo, double hi) {
@@ -99,8 +90,8 @@ namespace {
 
 // Required: fps, width, height, bit_depth, noise_sigma.
 void parse_camera(const Node& cam, CameraParams& c) {
-  refuse_unknown(cam, {"fps", "width", "height", "bit_depth", "noise_sigma", "shot_noise_gain",
-                       "background", "vignetting", "refresh_outside_disks"});
+  cam.refuse_unknown_keys({"fps", "width", "height", "bit_depth", "noise_sigma", "shot_noise_gain",
+                           "background", "vignetting", "refresh_outside_disks"});
   c.fps = need(cam, "fps", 1.0, 1000.0);
   c.width = static_cast<int>(need(cam, "width", 160, 4096));
   c.height = static_cast<int>(need(cam, "height", 120, 4096));
@@ -118,8 +109,8 @@ void parse_camera(const Node& cam, CameraParams& c) {
 
 // Required: mass_kg, radius_mm, friction.
 void parse_cap(const Node& cap, CapParams& cp) {
-  refuse_unknown(cap, {"mass_kg", "radius_mm", "friction", "height_mm", "kinetic_ratio",
-                       "inertia_factor", "x_m", "y_m", "table_friction"});
+  cap.refuse_unknown_keys({"mass_kg", "radius_mm", "friction", "height_mm", "kinetic_ratio",
+                           "inertia_factor", "x_m", "y_m", "table_friction"});
   cp.mass_kg = need(cap, "mass_kg", 1e-4, 1.0);
   cp.radius_m = need(cap, "radius_mm", 5.0, 50.0) / 1000.0;
   cp.friction = need(cap, "friction", 0.05, 3.0);
@@ -133,8 +124,9 @@ void parse_cap(const Node& cap, CapParams& cp) {
 
 // Required: free_turn_deg.
 void parse_bottle(const Node& bottle, BottleParams& bp) {
-  refuse_unknown(bottle, {"free_turn_deg", "x_m", "y_m", "height_mm", "free_torque_nm",
-                          "tight_stiffness_nm_per_rad", "capture_radius_mm", "tighten_clockwise"});
+  bottle.refuse_unknown_keys({"free_turn_deg", "x_m", "y_m", "height_mm", "free_torque_nm",
+                              "tight_stiffness_nm_per_rad", "capture_radius_mm",
+                              "tighten_clockwise"});
   bp.free_turn_deg = need(bottle, "free_turn_deg", 0.0, 3600.0);
   bp.x_m = want(bottle, "x_m", bp.x_m, -2.0, 2.0);
   bp.y_m = want(bottle, "y_m", bp.y_m, -2.0, 2.0);
@@ -149,10 +141,10 @@ void parse_bottle(const Node& bottle, BottleParams& bp) {
 
 // Required: vibration_mm, vibration_hz.
 void parse_arm(const Node& arm, ArmParams& ap) {
-  refuse_unknown(arm,
-                 {"vibration_mm", "vibration_hz", "vibration_rise_s", "vibration_full_speed_mps",
-                  "max_accel_mps2", "stop_decel_mps2", "max_yaw_accel_rps2", "stop_yaw_decel_rps2",
-                  "finger_accel_mps2", "finger_open_mm", "start_m", "start_yaw_deg"});
+  arm.refuse_unknown_keys({"vibration_mm", "vibration_hz", "vibration_rise_s",
+                           "vibration_full_speed_mps", "max_accel_mps2", "stop_decel_mps2",
+                           "max_yaw_accel_rps2", "stop_yaw_decel_rps2", "finger_accel_mps2",
+                           "finger_open_mm", "start_m", "start_yaw_deg"});
   ap.vibration_m = need(arm, "vibration_mm", 0.0, 5.0) / 1000.0;
   ap.vibration_hz = need(arm, "vibration_hz", 0.0, 200.0);
   ap.vibration_rise_s = want(arm, "vibration_rise_s", ap.vibration_rise_s, 0.0, 10.0);
@@ -173,8 +165,8 @@ void parse_arm(const Node& arm, ArmParams& ap) {
 }
 
 void parse_fingertip(const Node& ft, FingertipParams& fp) {
-  refuse_unknown(ft, {"dome_radius_mm", "ring_polar_deg", "normal_stiffness_n_per_mm",
-                      "normal_damping_nspm", "tangential_damping_nspm"});
+  ft.refuse_unknown_keys({"dome_radius_mm", "ring_polar_deg", "normal_stiffness_n_per_mm",
+                          "normal_damping_nspm", "tangential_damping_nspm"});
   fp.dome_radius_m = want(ft, "dome_radius_mm", fp.dome_radius_m * 1000.0, 2.0, 50.0) / 1000.0;
   if (auto rings = ft.find("ring_polar_deg")) {
     const std::vector<double> v = rings->as_doubles();
@@ -193,8 +185,8 @@ void parse_fingertip(const Node& ft, FingertipParams& fp) {
 }
 
 void parse_optics(const Node& so, SensorOpticsParams& o) {
-  refuse_unknown(so, {"mm_per_px", "disk_radius_px", "spot_peak_ref", "spot_sigma_min_px",
-                      "spot_sigma_max_px", "contact_on", "contact_off"});
+  so.refuse_unknown_keys({"mm_per_px", "disk_radius_px", "spot_peak_ref", "spot_sigma_min_px",
+                          "spot_sigma_max_px", "contact_on", "contact_off"});
   o.mm_per_px = want(so, "mm_per_px", o.mm_per_px, 0.001, 1.0);
   o.disk_radius_px = want(so, "disk_radius_px", o.disk_radius_px, 4.0, 20.0);
   o.spot_peak_ref = want(so, "spot_peak_ref", o.spot_peak_ref, 5.0, 250.0);
@@ -207,7 +199,7 @@ void parse_optics(const Node& so, SensorOpticsParams& o) {
 }
 
 void parse_sim(const Node& sim, Scenario& s) {
-  refuse_unknown(sim, {"dt_s", "max_time_s", "settle_after_done_s", "partial_slip_ratio"});
+  sim.refuse_unknown_keys({"dt_s", "max_time_s", "settle_after_done_s", "partial_slip_ratio"});
   s.dt_s = want(sim, "dt_s", s.dt_s, 1e-6, 1e-3);
   s.max_time_s = want(sim, "max_time_s", s.max_time_s, 0.1, 3600.0);
   s.settle_after_done_s = want(sim, "settle_after_done_s", s.settle_after_done_s, 0.0, 10.0);
@@ -217,15 +209,9 @@ void parse_sim(const Node& sim, Scenario& s) {
 // Overrides of the controller's settings, by the names of controller_keys().
 void parse_controller(const Node& ctl, std::vector<std::pair<std::string, double>>& out) {
   if (!ctl.is_map()) ctl.fail("must be a mapping of controller settings");
-  for (const std::string& path : ctl.unknown_keys({})) {
-    const std::string key = path.substr(path.rfind('.') + 1);
-    bool known = false;
-    for (const std::string& k : controller_keys())
-      known = known || k == key;
-    const Node n = ctl[key];
-    if (!known) n.fail("unknown controller setting (see docs/rig.md)");
-    out.emplace_back(key, checked(n, -1e6, 1e6));
-  }
+  ctl.refuse_unknown_keys(controller_keys());
+  for (const std::string& key : ctl.keys())
+    out.emplace_back(key, checked(ctl[key], -1e6, 1e6));
 }
 
 }  // namespace
@@ -233,8 +219,8 @@ void parse_controller(const Node& ctl, std::vector<std::pair<std::string, double
 Scenario parse_scenario(const std::string& text, const std::string& source) {
   const Node root = config::parse_yaml(text, source);
   if (!root.is_map()) root.fail("a scenario must be a mapping");
-  refuse_unknown(root, {"format", "seed", "camera", "cap", "bottle", "arm", "fingertip", "sensor",
-                        "sim", "controller"});
+  root.refuse_unknown_keys({"format", "seed", "camera", "cap", "bottle", "arm", "fingertip",
+                            "sensor", "sim", "controller"});
   Scenario s;
   s.source = source;
   const Node format = root["format"];

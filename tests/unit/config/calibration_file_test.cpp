@@ -70,7 +70,18 @@ TEST(CalibrationFile, UnknownKeysAreWarnedAbout) {
   parse_calibration(replace(kGood, "sensor_id: left", "sensor_id: left\nserial: 1234"), "w.yaml",
                     &warnings);
   ASSERT_EQ(warnings.size(), 1U);
-  EXPECT_NE(warnings[0].find("serial"), std::string::npos);
+  EXPECT_NE(warnings[0].find("w.yaml:3: unknown key 'serial' ignored"), std::string::npos)
+      << warnings[0];
+}
+
+TEST(CalibrationFile, AMisspeltKeyIsWarnedAboutWithTheClosestKey) {
+  std::vector<std::string> warnings;
+  const Calibration c = parse_calibration(
+      replace(kGood, "noise_floor:", "noise_floor: 4.0\nnoise_flor:"), "w.yaml", &warnings);
+  ASSERT_EQ(warnings.size(), 1U);
+  EXPECT_NE(warnings[0].find("unknown key 'noise_flor' ignored (did you mean 'noise_floor'?)"),
+            std::string::npos)
+      << warnings[0];
 }
 
 TEST(CalibrationFile, MissingFileNamesTheFile) {

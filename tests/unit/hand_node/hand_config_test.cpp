@@ -86,11 +86,26 @@ TEST_F(HandConfigFile, RealtimeIsOffByDefaultAndIsRead) {
   EXPECT_EQ(lock_only.priority, 0);
   EXPECT_TRUE(lock_only.lock_memory);
   EXPECT_TRUE(warnings.empty()) << warnings.front();
-  load_hand_config(write("realtime: {priority: 5, lock: true}\n"), &warnings);
-  ASSERT_EQ(warnings.size(), 1U);
-  EXPECT_NE(warnings[0].find("hand_node.yaml: unknown key 'realtime.lock' ignored"),
-            std::string::npos)
-      << warnings[0];
+}
+
+TEST_F(HandConfigFile, AMisspeltKeyIsRefusedAtItsLineWithTheClosestKey) {
+  const auto refused = [&](const std::string& extra, const std::string& expect) {
+    const fs::path p = write(extra);
+    try {
+      load_hand_config(p, nullptr);
+      ADD_FAILURE() << extra << " was accepted";
+    } catch (const config::ConfigError& e) {
+      EXPECT_EQ(std::string(e.what()), p.string() + expect);
+    }
+  };
+  refused("realtime: {priority: 5, lock: true}\n",
+          ":5: unknown key 'lock' in 'realtime' (did you mean 'lock_memory'?)");
+  refused("pair_windw_s: 0.001\n",
+          ":5: unknown key 'pair_windw_s' (did you mean 'pair_window_s'?)");
+  refused("realtime: {sched: fifo}\n",
+          ":5: unknown key 'sched' in 'realtime' (known keys: priority, lock_memory)");
+  refused("controller:\n  f1_n: 0.5\n  twist_dr_facter: 2\n",
+          ":7: unknown key 'twist_dr_facter' in 'controller' (did you mean 'twist_dr_factor'?)");
 }
 
 TEST_F(HandConfigFile, BadRealtimeNamesFileKeyAndValue) {

@@ -71,11 +71,17 @@ TEST(Scenario, ErrorsNameFileLineKeyAndValue) {
   EXPECT_NE(e.find("12"), std::string::npos) << e;
 
   e = error_of(kMinimal + "cap_typo: 1\n");
-  EXPECT_NE(e.find("cap_typo"), std::string::npos) << e;
-  EXPECT_NE(e.find("unknown key"), std::string::npos) << e;
+  EXPECT_NE(e.find("unknown key 'cap_typo'"), std::string::npos) << e;
 
   e = error_of(kMinimal + "controller: {f9_n: 1}\n");
-  EXPECT_NE(e.find("controller.f9_n"), std::string::npos) << e;
+  EXPECT_NE(e.find("unknown key 'f9_n' in 'controller' (did you mean 'f1_n'?)"), std::string::npos)
+      << e;
+
+  std::string misspelt = kMinimal;
+  misspelt.replace(misspelt.find("friction"), 8, "fricton");
+  e = error_of(misspelt);
+  EXPECT_NE(e.find("unknown key 'fricton' in 'cap' (did you mean 'friction'?)"), std::string::npos)
+      << e;
 
   std::string bad_format = kMinimal;
   bad_format.replace(0, bad_format.find('\n'), "format: tactile-scenario/2");

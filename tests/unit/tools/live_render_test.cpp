@@ -4,7 +4,10 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <initializer_list>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "dashboard.hpp"
 #include "tactile/util/files.hpp"
@@ -102,6 +105,56 @@ TEST(LiveRender, TinyWindowKeepsTheSummaries) {
   const std::string text = render(fixed_state(), {}, o);
   check_fits(text, o.width, o.height);
   check_golden("live_40x12", text);
+}
+
+std::vector<FingertipView> tips(std::initializer_list<const char*> ids) {
+  std::vector<FingertipView> out;
+  for (const char* id : ids) {
+    FingertipView f;
+    f.id = id;
+    out.push_back(f);
+  }
+  return out;
+}
+
+TEST(ScreenLayout, DrawsLeftOnTheLeftWhateverOrderTheFramesArrivedIn) {
+  EXPECT_EQ(screen_layout(tips({"right", "left"}), 100, 40, 3).order,
+            (std::vector<std::size_t>{1, 0}));
+  EXPECT_EQ(screen_layout(tips({"left", "right"}), 100, 40, 3).order,
+            (std::vector<std::size_t>{0, 1}));
+  EXPECT_EQ(screen_layout(tips({"right", "thumb", "left", "index"}), 200, 40, 3).order,
+            (std::vector<std::size_t>{2, 3, 1, 0}));
+}
+
+TEST(ScreenLayout, UsesTheWholeWindow) {
+  const auto both = tips({"left", "right"});
+  // Side by side, each block takes its half of any width, and the domes grow with the window.
+  const ScreenLayout small = screen_layout(both, 80, 24, 3);
+  EXPECT_TRUE(small.side_by_side);
+  EXPECT_EQ(small.block_width, 40);
+  const ScreenLayout large = screen_layout(both, 240, 50, 3);
+  EXPECT_TRUE(large.side_by_side);
+  EXPECT_EQ(large.block_width, 120);
+  EXPECT_EQ(large.grid_rows, 50 - 3 - 3 - 3 - 1);
+  EXPECT_GT(large.grid_rows, small.grid_rows);
+  // A dome is as tall as its block's width allows: a taller window gives the events the rest.
+  EXPECT_EQ(screen_layout(both, 80, 200, 3).grid_rows, (40 - 4) / 2 + 1);
+  // Too narrow for two blocks: stacked, each the whole width.
+  const ScreenLayout narrow = screen_layout(both, 50, 40, 3);
+  EXPECT_FALSE(narrow.side_by_side);
+  EXPECT_EQ(narrow.block_width, 50);
+  EXPECT_EQ(narrow.grid_rows, (40 - 6) / 2 - 3);
+  // Too small for a dome: summaries only.
+  EXPECT_EQ(screen_layout(both, 40, 12, 3).grid_rows, 0);
+}
+
+TEST(LiveRender, TheLeftFingertipIsDrawnOnTheLeftWhenTheRightArrivedFirst) {
+  LiveState s = fixed_state();
+  std::swap(s.fingertips[0], s.fingertips[1]);
+  RenderOptions o;
+  o.width = 100;
+  o.height = 40;
+  EXPECT_EQ(render(s, {}, o), render(fixed_state(), {}, o));
 }
 
 TEST(LiveRender, ColourMarksSlipAndOverWithEscapeCodesOnly) {

@@ -11,9 +11,8 @@ namespace tactile::config {
 // Reads a `controller:` section: every key is a field of tactile::control::Config with the same
 // name (docs/control.md lists them with units and defaults); absent keys keep their defaults.
 // `twist_angle_deg` may stand for `twist_angle_rad`. A bad value throws ConfigError naming the
-// file, line, key and value; unknown keys are listed in `warnings`.
-control::Config parse_controller_config(const Node& section,
-                                        std::vector<std::string>* warnings = nullptr);
+// file, line, key and value, and for an unknown key (naming the closest known one).
+control::Config parse_controller_config(const Node& section);
 
 // The names parse_controller_config() knows, in the order of docs/control.md.
 std::vector<std::string> controller_config_keys();

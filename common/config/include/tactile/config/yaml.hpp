@@ -4,7 +4,6 @@
 
 #include <cstdint>
 #include <filesystem>
-#include <initializer_list>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -55,8 +54,16 @@ class Node {
     return get(key, std::string(fallback));
   }
 
-  // Keys of a mapping that are not in `known` (to warn about typos).
-  std::vector<std::string> unknown_keys(std::initializer_list<std::string_view> known) const;
+  // A mapping's keys in file order (empty for anything else).
+  std::vector<std::string> keys() const;
+
+  // Strict configuration (docs/architecture.md, rule 7): throws ConfigError for the first key of
+  // this mapping that is not in `known`, at the key's own line and with the closest known key:
+  // "hand.yaml:12: unknown key 'slip_tresh' in 'controller' (did you mean 'slip_thresh'?)".
+  void refuse_unknown_keys(const std::vector<std::string>& known) const;
+  // For data files meant to cross versions (calibrations): the same findings as one warning
+  // each, "... ignored", instead of an error.
+  std::vector<std::string> unknown_key_warnings(const std::vector<std::string>& known) const;
 
   // Throws ConfigError "<file>:<line>: key '<path>': <what>".
   [[noreturn]] void fail(const std::string& what) const;
