@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <numbers>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "tactile/plot/figure.hpp"
@@ -151,8 +152,17 @@ void latency(const std::filesystem::path& dir) {
 }
 
 int run(int argc, char** argv) {
-  if (argc != 2) {
-    std::fprintf(stderr, "usage: plot_gallery OUT_DIR\n");
+  const std::string_view usage =
+      "usage: plot_gallery OUT_DIR\n"
+      "Draws the example figures of docs/plot.md (pareto, centroid change, shear field, "
+      "timeline, latency) as PNG files into OUT_DIR.\n";
+  if (argc == 2 && (std::string_view(argv[1]) == "-h" || std::string_view(argv[1]) == "--help")) {
+    std::fwrite(usage.data(), 1, usage.size(), stdout);
+    return 0;
+  }
+  if (argc != 2 || argv[1][0] == '-') {
+    if (argc == 2) std::fprintf(stderr, "plot_gallery: unknown option '%s'\n", argv[1]);
+    std::fwrite(usage.data(), 1, usage.size(), stderr);
     return 2;
   }
   const std::filesystem::path dir = argv[1];
