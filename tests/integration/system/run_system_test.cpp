@@ -59,7 +59,8 @@ TEST(RunSystem, EndpointsReachableFromTheHostAndTheRunRecordedWithRawFrames) {
   // 10 s from the host with the printed command, as the README says; the recording is the
   // first_hour fixture's, which the next steps read in Python, export to MCAP and plot.
   std::filesystem::remove(host);
-  Process recorder({TACTILE_RECORD_PATH, "-o", host.string(), "--duration", "10", m[1], m[2], m[3]});
+  Process recorder(
+      {TACTILE_RECORD_PATH, "-o", host.string(), "--duration", "10", m[1], m[2], m[3]});
 
   // observe.yaml ends at its max_time_s with the task unfinished: exit 1, saying so.
   const auto r = run.wait(180s);
