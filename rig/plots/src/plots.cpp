@@ -114,8 +114,7 @@ std::vector<std::filesystem::path> write_plots(const LockstepResult& run,
 
 namespace tactile::rig {
 
-std::filesystem::path write_latency_plot(std::span<const double> latency_ms,
-                                         const std::filesystem::path& dir) {
+plot::Figure latency_figure(std::span<const double> latency_ms) {
   plot::Figure fig(900, 420);
   fig.title("camera timestamp -> ArmCommand received by the arm controller, real time");
   auto& p = fig.add_panel();
@@ -127,22 +126,35 @@ std::filesystem::path write_latency_plot(std::span<const double> latency_ms,
     return sorted[std::clamp<std::size_t>(k, 1, sorted.size()) - 1];
   };
   // The bulk: a pause of the machine tens of milliseconds long is counted at the edge.
-  p.histogram(latency_ms, 60, plot::RobustRange{0.0, 0.95, 0.5},
-              std::to_string(latency_ms.size()) + " answered frames");
+  const plot::RobustRange bulk{0.0, 0.95, 0.5};
+  p.histogram(latency_ms, 60, bulk, std::to_string(latency_ms.size()) + " answered frames");
   if (!sorted.empty()) {
     plot::Style marker;
     marker.line_width = 1;
     marker.color = plot::Color{200, 40, 40};
+    // A percentile beyond the bulk is named in the title, not drawn: its line would set the axis.
+    const auto shown = plot::robust_range(latency_ms, bulk);
+    const double shown_hi = shown ? shown->second : sorted.back();
+    std::string beyond;
     char text[64];
-    std::snprintf(text, sizeof text, "p50 %.2f ms", rank(0.5));
-    p.vline(rank(0.5), text, marker);
-    std::snprintf(text, sizeof text, "p99 %.2f ms", rank(0.99));
-    p.vline(rank(0.99), text, marker);
+    for (const double q : {0.5, 0.99}) {
+      std::snprintf(text, sizeof text, "p%.0f %.2f ms", q * 100, rank(q));
+      if (rank(q) <= shown_hi) {
+        p.vline(rank(q), text, marker);
+      } else {
+        beyond += std::string(text) + ", ";
+      }
+    }
     std::snprintf(text, sizeof text, "max %.1f ms", sorted.back());
-    p.title(text);
+    p.title(beyond + text);
   }
+  return fig;
+}
+
+std::filesystem::path write_latency_plot(std::span<const double> latency_ms,
+                                         const std::filesystem::path& dir) {
   const auto path = dir / "latency.png";
-  fig.save_png(path);
+  latency_figure(latency_ms).save_png(path);
   return path;
 }
 

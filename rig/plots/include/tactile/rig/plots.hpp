@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "tactile/control/config.hpp"
+#include "tactile/plot/figure.hpp"
 #include "tactile/rig/lockstep.hpp"
 
 namespace tactile::rig {
@@ -24,6 +25,10 @@ std::vector<std::filesystem::path> write_plots(const LockstepResult& run,
                                                const control::Config& controller,
                                                const std::filesystem::path& dir);
 
+// The latency histogram: the bulk of the samples on the x axis (a machine's pause of tens of
+// milliseconds counted at the edge), p50 and p99 drawn where they fall inside it and named in
+// the title where they do not, the maximum in the title.
+plot::Figure latency_figure(std::span<const double> latency_ms);
 // latency.png: a histogram of the real-time run's camera timestamp -> ArmCommand received.
 std::filesystem::path write_latency_plot(std::span<const double> latency_ms,
                                          const std::filesystem::path& dir);
