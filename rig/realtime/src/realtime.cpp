@@ -9,6 +9,7 @@
 #include <cstring>
 #include <deque>
 #include <memory>
+#include <mutex>
 #include <thread>
 
 #include "tactile/camera/fake_gv_camera.hpp"
@@ -33,7 +34,57 @@ namespace {
 
 using std::chrono::milliseconds;
 
-void fill_truth_message(const GroundTruth& gt, std::int64_t now_ns, v1::GroundTruth& out) {
+// A timerfd on CLOCK_REALTIME (util::realtime_ns's clock), armed for one absolute instant: a
+// file descriptor that becomes readable then, for poll. Without one (no timerfd) fd() is -1
+// and the millisecond timeout alone bounds the wait.
+class WakeTimer {
+ public:
+  WakeTimer() : fd_(::timerfd_create(CLOCK_REALTIME, TFD_NONBLOCK | TFD_CLOEXEC)) {
+    if (fd_.get() < 0)
+      util::log_warn("no timerfd ({}): frames start up to a millisecond late",
+                     std::strerror(errno));
+  }
+  int fd() const { return fd_.get(); }
+  // Re-arming clears an expiry not yet read, so the descriptor is readable only from `at_ns` on.
+  void arm_at(std::int64_t at_ns) const {
+    if (fd_.get() < 0) return;
+    itimerspec when{};
+    when.it_value.tv_sec = static_cast<time_t>(at_ns / 1'000'000'000);
+    when.it_value.tv_nsec = static_cast<long>(at_ns % 1'000'000'000);
+    ::timerfd_settime(fd_.get(), TFD_TIMER_ABSTIME, &when, nullptr);
+  }
+
+ private:
+  util::Fd fd_;
+};
+
+// Sends of one image a truth keeps the block ids of: a camera sends an image again only while
+// the rig renders nothing newer (it runs late), rarely more than once or twice.
+constexpr std::size_t kMaxSends = 8;
+// A truth not yet published when both cameras have not sent anything newer this many periods
+// after its send instant (no receiver streams, or the rig fell behind) is published with the
+// block ids known by then.
+constexpr std::int64_t kTruthWaitPeriods = 4;
+
+// A truth kept until the measured frames of its instant arrive (a few frame periods), and
+// published once the cameras have sent its images (their block ids known).
+struct KeptTruth {
+  std::uint64_t frame = 0;
+  std::int64_t send_ns = 0;  // the instant the cameras send it: its camera timestamp
+  double t = 0;
+  control::Phase phase = control::Phase::kIdle;  // the controller's, when it was taken
+  GroundTruth truth;
+  std::array<bool, kFingertips> scored{};
+  // The block ids each fingertip's camera sent this image with, in order.
+  std::array<std::array<std::uint64_t, kMaxSends>, kFingertips> block_ids{};
+  std::array<std::size_t, kFingertips> sends{};
+  bool published = false;
+};
+
+// The wire's GroundTruth of a kept truth: each fingertip with the block ids its camera sent the
+// image with (docs/rig.md, "Joining truth and frames").
+void fill_truth_message(const KeptTruth& kept, std::int64_t now_ns, v1::GroundTruth& out) {
+  const GroundTruth& gt = kept.truth;
   static const char* kIds[kFingertips] = {"left", "right"};
   out.set_time_ns(now_ns);
   out.set_sim_time_s(gt.sim_time_s);
@@ -44,7 +95,11 @@ void fill_truth_message(const GroundTruth& gt, std::int64_t now_ns, v1::GroundTr
     v1::FingertipTruth& t = (*tips)[static_cast<int>(i)];
     const FingertipTruth& ft = gt.fingertips[i];
     t.set_sensor_id(kIds[i]);
-    t.set_camera_frame_id(ft.camera_frame_id);
+    const std::size_t sends = kept.sends[i];
+    t.set_camera_frame_id(sends > 0 ? kept.block_ids[i][0] : 0);
+    t.clear_resent_camera_frame_ids();
+    for (std::size_t s = 1; s < sends; ++s)
+      t.add_resent_camera_frame_ids(kept.block_ids[i][s]);
     t.set_camera_timestamp_ns(ft.camera_timestamp_ns);
     auto* els = t.mutable_elements();
     while (els->size() < static_cast<int>(kElementsPerFingertip))
@@ -71,37 +126,43 @@ void fill_truth_message(const GroundTruth& gt, std::int64_t now_ns, v1::GroundTr
   out.set_twist_cycle(gt.twist_cycle);
 }
 
-// A timerfd on CLOCK_REALTIME (util::realtime_ns's clock), armed for one absolute instant: a
-// file descriptor that becomes readable then, for poll. Without one (no timerfd) fd() is -1
-// and the millisecond timeout alone bounds the wait.
-class WakeTimer {
+// What one camera sent, from its thread to the run's: per send the rendered frame and the
+// GigE Vision block id. A fixed ring under a lock held for a copy; a full ring drops the send
+// (counted: that frame then joins its truth by timestamp only).
+class SentQueue {
  public:
-  WakeTimer() : fd_(::timerfd_create(CLOCK_REALTIME, TFD_NONBLOCK | TFD_CLOEXEC)) {
-    if (fd_.get() < 0)
-      util::log_warn("no timerfd ({}): frames start up to a millisecond late",
-                     std::strerror(errno));
+  struct Sent {
+    std::uint64_t frame = 0;
+    std::uint64_t block_id = 0;
+  };
+  void push(Sent s) noexcept {
+    const std::lock_guard lock(mutex_);
+    if (size_ == ring_.size()) {
+      ++dropped_;
+      return;
+    }
+    ring_[(head_ + size_) % ring_.size()] = s;
+    ++size_;
   }
-  int fd() const { return fd_.get(); }
-  // Re-arming clears an expiry not yet read, so the descriptor is readable only from `at_ns` on.
-  void arm_at(std::int64_t at_ns) const {
-    if (fd_.get() < 0) return;
-    itimerspec when{};
-    when.it_value.tv_sec = static_cast<time_t>(at_ns / 1'000'000'000);
-    when.it_value.tv_nsec = static_cast<long>(at_ns % 1'000'000'000);
-    ::timerfd_settime(fd_.get(), TFD_TIMER_ABSTIME, &when, nullptr);
+  bool pop(Sent& s) noexcept {
+    const std::lock_guard lock(mutex_);
+    if (size_ == 0) return false;
+    s = ring_[head_];
+    head_ = (head_ + 1) % ring_.size();
+    --size_;
+    return true;
+  }
+  std::uint64_t dropped() const noexcept {
+    const std::lock_guard lock(mutex_);
+    return dropped_;
   }
 
  private:
-  util::Fd fd_;
-};
-
-// A truth kept until the measured frames of its instant arrive (a few frame periods).
-struct KeptTruth {
-  std::uint64_t frame = 0;
-  double t = 0;
-  control::Phase phase = control::Phase::kIdle;  // the controller's, when it was taken
-  GroundTruth truth;
-  std::array<bool, kFingertips> scored{};
+  mutable std::mutex mutex_;
+  std::array<Sent, 256> ring_{};
+  std::size_t head_ = 0;
+  std::size_t size_ = 0;
+  std::uint64_t dropped_ = 0;
 };
 
 // A whole real-time run: the world stepped to the wall clock, the cameras fed, the arm link
@@ -126,6 +187,12 @@ class RealtimeRun {
   void serve_until(std::int64_t render_ns);
   // Renders and publishes frame `frame_` for its send instant and keeps its truth.
   void render_frame(std::int64_t send_ns);
+  // Notes the block ids the cameras sent kept truths with.
+  void take_sent();
+  // Publishes, in order, the kept truths whose images the cameras are done sending (both sent a
+  // newer one, or kTruthWaitPeriods passed); with `all`, every kept truth not yet published.
+  void publish_sent_truths(std::int64_t now_ns, bool all);
+  void publish_truth(KeptTruth& kept);
   // Sends the peer the arm's state. False when the run ends: no hand_node came.
   bool answer_arm(std::int64_t now_ns);
   // True when the run ends after this frame.
@@ -144,6 +211,9 @@ class RealtimeRun {
   const std::int64_t lead_ns_;
   CameraParams cam_;
   SimulatedSensors sensors_;
+  // Before the cameras: their threads push into it until they are destroyed.
+  std::array<SentQueue, kFingertips> sent_;
+  std::array<std::uint64_t, kFingertips> newest_sent_{};  // the newest frame each camera sent
   std::vector<std::unique_ptr<camera::FakeGvCamera>> cameras_;
   RunScorer scorer_;
   const Vec3 transport_;
@@ -219,6 +289,11 @@ RealtimeRun::RealtimeRun(const Scenario& sc, const RealtimeOptions& opt)
     fo.pixel_format = cam_.bit_depth == 8 ? PixelFormat::kMono8 : PixelFormat::kMono16;
     fo.frame_rate_hz = cam_.fps;
     cameras_.push_back(std::make_unique<camera::FakeGvCamera>(fo));
+    // An image the camera sent with its own block id: the id sensor_node publishes the frame
+    // with. A frame before the first image or in another format carries no image of ours.
+    cameras_.back()->set_sent_observer([queue = &sent_[i]](const camera::SentFrame& s) {
+      if (s.format_matched && s.frame_id != 0) queue->push({s.frame_id, s.block_id});
+    });
     util::log_info("camera {} ({}) serving on {}", ids[i], fo.serial, fo.address);
   }
 
@@ -380,6 +455,8 @@ void RealtimeRun::serve_until(std::int64_t render_ns) {
     while (events_ && events_->receive(msg_, milliseconds(0)))
       on_event();
     check_deadman(util::realtime_ns());
+    take_sent();
+    publish_sent_truths(util::realtime_ns(), false);
     if (now >= render_ns || util::stop_requested()) break;
   }
 }
@@ -391,6 +468,7 @@ void RealtimeRun::render_frame(std::int64_t send_ns) {
   const GroundTruth& gt = sensors_.truth().take(world_, frame_, slip_threshold_mm(cfg_, phase_));
   KeptTruth kt;
   kt.frame = frame_;
+  kt.send_ns = send_ns;
   kt.t = world_.time();
   kt.phase = phase_;
   kt.truth = gt;
@@ -416,14 +494,49 @@ void RealtimeRun::render_frame(std::int64_t send_ns) {
   }
   scorer_.add_truth(frame_ - first_frame_, kt.t, kt.truth, {phase_, twist_cycle_},
                     frame_pose(world_, transport_));
-  if (truth_pub_) {
-    fill_truth_message(kt.truth, util::realtime_ns(), *truth_env_.mutable_ground_truth());
-    wire::encode(truth_env_, out_);
-    truth_pub_->send(wire::kTruthTopic, wire::bytes_of(out_));
-  }
   kept_.push_back(std::move(kt));
-  while (kept_.size() > 64)
+  while (kept_.size() > 64) {
+    if (!kept_.front().published) publish_truth(kept_.front());
     kept_.pop_front();
+  }
+}
+
+void RealtimeRun::take_sent() {
+  SentQueue::Sent s;
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    while (sent_[i].pop(s)) {
+      newest_sent_[i] = std::max(newest_sent_[i], s.frame);
+      const auto it = std::find_if(kept_.rbegin(), kept_.rend(),
+                                   [&](const KeptTruth& k) { return k.frame == s.frame; });
+      if (it == kept_.rend() || it->published || it->sends[i] == kMaxSends) {
+        ++c_.sends_after_truth;
+        continue;
+      }
+      it->block_ids[i][it->sends[i]++] = s.block_id;
+    }
+  }
+}
+
+void RealtimeRun::publish_sent_truths(std::int64_t now_ns, bool all) {
+  for (KeptTruth& k : kept_) {
+    if (k.published) continue;
+    bool done = all || now_ns >= k.send_ns + kTruthWaitPeriods * period_ns_;
+    if (!done) {
+      done = true;
+      for (std::size_t i = 0; i < kFingertips; ++i)
+        done = done && newest_sent_[i] > k.frame;
+    }
+    if (!done) return;  // the later ones wait too: truth is published in frame order
+    publish_truth(k);
+  }
+}
+
+void RealtimeRun::publish_truth(KeptTruth& kept) {
+  kept.published = true;
+  if (!truth_pub_) return;
+  fill_truth_message(kept, util::realtime_ns(), *truth_env_.mutable_ground_truth());
+  wire::encode(truth_env_, out_);
+  truth_pub_->send(wire::kTruthTopic, wire::bytes_of(out_));
 }
 
 bool RealtimeRun::answer_arm(std::int64_t now_ns) {
@@ -460,6 +573,13 @@ bool RealtimeRun::ended_after_frame(std::int64_t now_ns) {
 }
 
 void RealtimeRun::finish() {
+  // The cameras stop sending before the last truths go out, so every frame sent has its block
+  // id in the truth published.
+  cameras_.clear();
+  take_sent();
+  publish_sent_truths(0, true);
+  for (const SentQueue& q : sent_)
+    c_.sends_after_truth += q.dropped();
   if (util::stop_requested() && !ended_) rep_.end_reason = "stopped";
   scorer_.finish(world_.cap().dropped, static_cast<double>(util::realtime_ns() - start_ns_) * 1e-9,
                  frame_ - first_frame_);
@@ -473,9 +593,10 @@ void RealtimeRun::finish() {
   }
   util::log_info(
       "frames rendered {} (late {}, published late {}), scored {} (unmatched {}, incomplete {}), "
-      "commands {} (refused {}), deadman trips {}, events {}",
+      "commands {} (refused {}), deadman trips {}, events {}, sends after their truth {}",
       c_.frames_rendered, c_.late_renders, c_.late_publishes, c_.frames_scored, c_.frames_unmatched,
-      c_.frames_incomplete, c_.commands, c_.invalid_commands, c_.deadman_trips, c_.events);
+      c_.frames_incomplete, c_.commands, c_.invalid_commands, c_.deadman_trips, c_.events,
+      c_.sends_after_truth);
 }
 
 RealtimeResult RealtimeRun::run() {

@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <regex>
@@ -188,6 +190,83 @@ TEST(LoopbackSystem, CompletesThePapersTask) {
   for (const char* png : {"fig10.png", "timeline.png"}) {
     EXPECT_GT(std::filesystem::file_size(s.dir() / "plots" / png), 1000U) << png;
   }
+}
+
+// A user's join of a recording: every TactileFrame finds the GroundTruth of its image by the
+// camera's block id (sensor_id, camera_frame_id; or a resent image's id), and that is the truth
+// the camera timestamp finds too. A few seconds of the running system, read as a recorder would.
+TEST(LoopbackSystem, GroundTruthJoinsItsFramesByBlockId) {
+  zmq::context_t ctx;
+  wire::Subscriber frames(ctx, {"tcp://127.0.0.1:5555"}, {wire::kFrameTopicPrefix});
+  wire::Subscriber truth(ctx, {"tcp://127.0.0.1:5557"}, {wire::kTruthTopic});
+  LoopbackSystem s(kScenario);
+  std::vector<v1::TactileFrame> got_frames;
+  std::vector<v1::GroundTruth> got_truth;
+  wire::TopicMessage m;
+  v1::Envelope env;
+  const auto read_truth = [&] {
+    while (truth.receive(m, 0ms)) {
+      ASSERT_EQ(wire::decode(m.payload, env), wire::DecodeStatus::kOk);
+      ASSERT_TRUE(env.has_ground_truth());
+      got_truth.push_back(env.ground_truth());
+    }
+  };
+  // Frames from the first truth this subscriber got on: truth is published in frame order, so
+  // every truth of a later frame reaches it (it subscribed late to the earlier ones).
+  std::int64_t from_ns = 0;
+  std::optional<std::chrono::steady_clock::time_point> until;
+  const auto give_up = std::chrono::steady_clock::now() + 60s;
+  while (!until || std::chrono::steady_clock::now() < *until) {
+    ASSERT_LT(std::chrono::steady_clock::now(), give_up) << "no frames and truth" << logs(s);
+    read_truth();
+    if (from_ns == 0 && !got_truth.empty()) {
+      from_ns = got_truth.front().fingertips(0).camera_timestamp_ns();
+      until = std::chrono::steady_clock::now() + 3s;
+    }
+    if (!frames.receive(m, 20ms)) continue;
+    ASSERT_EQ(wire::decode(m.payload, env), wire::DecodeStatus::kOk);
+    if (from_ns != 0 && env.tactile_frame().camera_timestamp_ns() >= from_ns)
+      got_frames.push_back(env.tactile_frame());
+  }
+  // The truth of the last frames is published once the cameras sent newer images (or at most
+  // four periods later).
+  const auto truth_until = std::chrono::steady_clock::now() + 1s;
+  while (std::chrono::steady_clock::now() < truth_until) {
+    read_truth();
+    std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_GT(got_frames.size(), 50U) << logs(s);
+
+  std::size_t resent = 0;
+  std::size_t wraps = 0;  // a block id below its sensor's previous one: 65535 to 1
+  std::map<std::string, std::uint64_t> last_id;
+  for (const v1::TactileFrame& f : got_frames) {
+    auto& last = last_id[f.sensor_id()];
+    if (f.camera_frame_id() < last) ++wraps;
+    last = f.camera_frame_id();
+    std::vector<std::size_t> by_id, by_time;
+    for (std::size_t k = 0; k < got_truth.size(); ++k) {
+      for (const v1::FingertipTruth& t : got_truth[k].fingertips()) {
+        if (t.sensor_id() != f.sensor_id()) continue;
+        const auto& again = t.resent_camera_frame_ids();
+        const bool is_resend =
+            std::find(again.begin(), again.end(), f.camera_frame_id()) != again.end();
+        if (t.camera_frame_id() == f.camera_frame_id() || is_resend) by_id.push_back(k);
+        if (is_resend) ++resent;
+        if (t.camera_timestamp_ns() == f.camera_timestamp_ns()) by_time.push_back(k);
+      }
+    }
+    ASSERT_EQ(by_id.size(), 1U) << f.sensor_id() << " frame " << f.sequence() << " block id "
+                                << f.camera_frame_id() << ": truths with that id " << by_id.size();
+    ASSERT_EQ(by_time.size(), 1U) << f.sensor_id() << " frame " << f.sequence();
+    EXPECT_EQ(by_id[0], by_time[0])
+        << f.sensor_id() << " frame " << f.sequence() << " block id " << f.camera_frame_id();
+  }
+  std::fprintf(
+      stderr,
+      "[measured] %zu TactileFrames joined their GroundTruth by block id (%zu of them a "
+      "resent image), the same truth as by camera timestamp; %zu truths; %zu block id wraps\n",
+      got_frames.size(), resent, got_truth.size(), wraps);
 }
 
 TEST(ProcessFaults, SensorNodeKilledInTransportHoldsThenResumesFromItsSavedReference) {

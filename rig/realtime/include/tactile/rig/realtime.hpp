@@ -60,6 +60,9 @@ struct RealtimeCounters {
   std::uint64_t frames_scored = 0;     // measured frames matched with their truth
   std::uint64_t frames_unmatched = 0;  // measured frames whose truth was not (or no longer) known
   std::uint64_t frames_incomplete = 0;
+  // Sends of an image whose GroundTruth had gone out already (published after
+  // kTruthWaitPeriods): those frames join their truth by camera timestamp only.
+  std::uint64_t sends_after_truth = 0;
   std::uint64_t commands = 0;
   std::uint64_t invalid_commands = 0;  // refused: not decodable or a value the arm must not follow
   std::uint64_t deadman_trips = 0;
