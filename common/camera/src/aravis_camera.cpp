@@ -225,6 +225,7 @@ struct AravisCamera::Impl {
   std::mutex slot_mutex;
   ArvBuffer* held = nullptr;  // popped and handed out; goes back to the stream on release
   bool acquiring = false;
+  bool found_silent = false;  // stop() found the camera silent, and it was not started since
   bool is_gv = false;
   std::string device_ip;     // the address GVCP goes to; empty when the camera is not GigE Vision
   UdpSocket control_socket;  // the device's GVCP socket (fd -1 when not found)
@@ -494,6 +495,7 @@ struct AravisCamera::Impl {
     arv_camera_start_acquisition(camera.get(), &error);
     detail::throw_if_error(error, fmt::format("{}: cannot start acquisition", where()));
     acquiring = true;
+    found_silent = false;
   }
 
   // Whether the camera answers a GVCP read now (a short probe); true when there is nothing to
@@ -503,7 +505,10 @@ struct AravisCamera::Impl {
            gvcp_device_answers(device_ip, std::chrono::milliseconds(300));
   }
 
-  void stop() noexcept { stop_acquisition(!acquiring || answers()); }
+  void stop() noexcept {
+    if (acquiring) found_silent = !answers();
+    stop_acquisition(!found_silent);
+  }
 
   // `camera_answers`: the probe's result. Telling a camera that is gone to stop costs Aravis's
   // 2.5 s control timeout.
@@ -545,7 +550,9 @@ struct AravisCamera::Impl {
   }
 
   void close() noexcept {
-    const bool camera_answers = answers();
+    // Not asked again when stop() just found it silent (sensor_node stops, then destroys).
+    const bool camera_answers = !found_silent && answers();
+    found_silent = false;
     stop_acquisition(camera_answers);
     if (stream) {
       guint64 completed = 0;
