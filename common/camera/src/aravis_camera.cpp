@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -15,6 +16,7 @@
 #include <limits>
 #include <mutex>
 #include <stdexcept>
+#include <vector>
 
 #include "aravis_support.hpp"
 #include "tactile/camera/private_network.hpp"
@@ -37,32 +39,49 @@ std::int64_t read_rmem_max() {
   return file ? value : -1;
 }
 
-// Sizes the receive buffer of this process's UDP socket bound to `port` (Aravis's stream socket,
-// which its API does not expose) now, rather than when the stream's first frame starts, which is
-// how Aravis 0.8.26 applies its FIXED size: the first frame's packets then met the default
-// buffer (about 200 KiB), and a 640x480 frame overflowed it. Start-up only: one getsockname per
-// open descriptor. Returns false when no such socket was found or the size was refused.
-bool size_stream_socket(std::uint16_t port, std::size_t bytes) {
+struct UdpSocket {
+  int fd = -1;
+  sockaddr_in local{};
+};
+
+bool same_local(const sockaddr_in& a, const sockaddr_in& b) {
+  return a.sin_port == b.sin_port && a.sin_addr.s_addr == b.sin_addr.s_addr;
+}
+
+// This process's IPv4 UDP sockets with their local addresses. Aravis's API does not expose its
+// sockets; they are found here. One getsockname per open descriptor: open and close only.
+std::vector<UdpSocket> udp_sockets() {
+  std::vector<UdpSocket> out;
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd", ec)) {
     const std::string name = entry.path().filename().string();
-    int fd = -1;
-    if (std::from_chars(name.data(), name.data() + name.size(), fd).ec != std::errc{}) continue;
-    sockaddr_in local{};
-    socklen_t length = sizeof(local);
-    if (::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &length) != 0 ||
-        local.sin_family != AF_INET || ntohs(local.sin_port) != port) {
-      continue;
-    }
+    UdpSocket s;
+    if (std::from_chars(name.data(), name.data() + name.size(), s.fd).ec != std::errc{}) continue;
+    socklen_t length = sizeof(s.local);
     int type = 0;
     socklen_t type_length = sizeof(type);
-    if (::getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &type_length) != 0 || type != SOCK_DGRAM)
-      continue;
-    const int size = static_cast<int>(
-        std::min<std::size_t>(bytes, static_cast<std::size_t>(std::numeric_limits<int>::max())));
-    return ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &size, sizeof(size)) == 0;
+    if (::getsockname(s.fd, reinterpret_cast<sockaddr*>(&s.local), &length) == 0 &&
+        s.local.sin_family == AF_INET &&
+        ::getsockopt(s.fd, SOL_SOCKET, SO_TYPE, &type, &type_length) == 0 && type == SOCK_DGRAM) {
+      out.push_back(s);
+    }
   }
-  return false;
+  return out;
+}
+
+// Sizes the receive buffer of Aravis's stream socket (bound to `port`) now, rather than when the
+// stream's first frame starts, which is how Aravis 0.8.26 applies its FIXED size: the first
+// frame's packets then met the default buffer (about 200 KiB), and a 640x480 frame overflowed
+// it. Returns false when no such socket was found or the size was refused.
+bool size_stream_socket(std::uint16_t port, std::size_t bytes) {
+  const auto sockets = udp_sockets();
+  const auto it = std::find_if(sockets.begin(), sockets.end(),
+                               [&](const UdpSocket& s) { return ntohs(s.local.sin_port) == port; });
+  if (it == sockets.end()) return false;
+  const int fd = it->fd;
+  const int size = static_cast<int>(
+      std::min<std::size_t>(bytes, static_cast<std::size_t>(std::numeric_limits<int>::max())));
+  return ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &size, sizeof(size)) == 0;
 }
 
 guint to_microseconds(Duration d) {
@@ -206,7 +225,10 @@ struct AravisCamera::Impl {
   std::mutex slot_mutex;
   ArvBuffer* held = nullptr;  // popped and handed out; goes back to the stream on release
   bool acquiring = false;
+  bool found_silent = false;  // stop() found the camera silent, and it was not started since
   bool is_gv = false;
+  std::string device_ip;     // the address GVCP goes to; empty when the camera is not GigE Vision
+  UdpSocket control_socket;  // the device's GVCP socket (fd -1 when not found)
 
   FrameSequencer sequencer;
   CameraCounters counted;  // ours; the stream's own statistics are added in counters()
@@ -246,6 +268,8 @@ struct AravisCamera::Impl {
 
   void connect() {
     GError* error = nullptr;
+    control_socket = UdpSocket{};
+    const std::vector<UdpSocket> sockets_before = udp_sockets();
     if (is_ipv4(options.camera)) {
       // Straight to the address: discovery may answer through another interface (notes).
       const std::string local = options.interface_address.empty()
@@ -268,6 +292,45 @@ struct AravisCamera::Impl {
     }
     if (!camera) throw std::runtime_error(fmt::format("{}: cannot open", where()));
     is_gv = arv_camera_is_gv_device(camera.get()) != FALSE;
+    device_ip.clear();
+    if (is_ipv4(options.camera)) {
+      device_ip = options.camera;
+    } else if (is_gv) {
+      // Found by discovery: ask it at the address Aravis talks to.
+      GSocketAddress* address =
+          arv_gv_device_get_device_address(ARV_GV_DEVICE(arv_camera_get_device(camera.get())));
+      if (G_IS_INET_SOCKET_ADDRESS(address)) {
+        const std::unique_ptr<gchar, void (*)(gpointer)> text(
+            g_inet_address_to_string(
+                g_inet_socket_address_get_address(G_INET_SOCKET_ADDRESS(address))),
+            g_free);
+        if (text) device_ip = text.get();
+      }
+    }
+    if (is_gv) find_control_socket(sockets_before);
+  }
+
+  // Remembers the device's GVCP socket: the one UDP socket that opening the camera made on the
+  // local address Aravis reports (which has no port). Opening is serialized (setup_mutex), so no
+  // other camera adds one meanwhile; when it is not exactly one, none is remembered.
+  void find_control_socket(const std::vector<UdpSocket>& before) {
+    GSocketAddress* local =
+        arv_gv_device_get_interface_address(ARV_GV_DEVICE(arv_camera_get_device(camera.get())));
+    sockaddr_in address{};
+    if (local == nullptr ||
+        g_socket_address_to_native(local, &address, sizeof(address), nullptr) == FALSE ||
+        address.sin_family != AF_INET) {
+      return;
+    }
+    int found = 0;
+    for (const UdpSocket& s : udp_sockets()) {
+      if (s.local.sin_addr.s_addr != address.sin_addr.s_addr) continue;
+      const bool old = std::any_of(before.begin(), before.end(), [&](const UdpSocket& b) {
+        return b.fd == s.fd && same_local(b.local, s.local);
+      });
+      if (!old && ++found == 1) control_socket = s;
+    }
+    if (found != 1) control_socket = UdpSocket{};
   }
 
   void configure() {
@@ -432,15 +495,28 @@ struct AravisCamera::Impl {
     arv_camera_start_acquisition(camera.get(), &error);
     detail::throw_if_error(error, fmt::format("{}: cannot start acquisition", where()));
     acquiring = true;
+    found_silent = false;
+  }
+
+  // Whether the camera answers a GVCP read now (a short probe); true when there is nothing to
+  // ask (not GigE Vision, or not open).
+  bool answers() const noexcept {
+    return !camera || device_ip.empty() ||
+           gvcp_device_answers(device_ip, std::chrono::milliseconds(300));
   }
 
   void stop() noexcept {
+    if (acquiring) found_silent = !answers();
+    stop_acquisition(!found_silent);
+  }
+
+  // `camera_answers`: the probe's result. Telling a camera that is gone to stop costs Aravis's
+  // 2.5 s control timeout.
+  void stop_acquisition(bool camera_answers) noexcept {
     release();
     if (!acquiring) return;
     acquiring = false;
-    // Telling a camera that is gone to stop costs Aravis's 2.5 s control timeout: ask first.
-    if (!is_ipv4(options.camera) ||
-        gvcp_device_answers(options.camera, std::chrono::milliseconds(300))) {
+    if (camera_answers) {
       GError* error = nullptr;
       arv_camera_stop_acquisition(camera.get(), &error);
       if (error != nullptr) last_error = detail::take_error(error, where() + ": stop acquisition");
@@ -448,8 +524,36 @@ struct AravisCamera::Impl {
     drain();
   }
 
+  // For a camera that no longer answers: makes every further GVCP command of its device fail at
+  // once instead of waiting for it. Aravis 0.8.26 has no setting for its GVCP timeout (500 ms)
+  // or tries (5), and dropping the objects sends three commands, each waited for in full
+  // (7.5 s per camera, measured): the stream's "stop stream channel" (SCP host port 0), the
+  // heartbeat's control-channel read, which the device's finalize joins, and its "leave
+  // control". shutdown(SHUT_WR) on the device's control socket (found by the local address
+  // Aravis reports) makes each send fail with EPIPE; Aravis gives up after its tries without
+  // waiting. Linux applies it to an unconnected UDP socket although it returns ENOTCONN. At
+  // most the heartbeat's read already under way is waited for (500 ms). The socket is closed
+  // with the device as before; nothing else changes.
+  void stop_talking_to_device() noexcept {
+    sockaddr_in now{};
+    socklen_t length = sizeof(now);
+    // Still the socket found at open (the device keeps it open until it is finalized).
+    if (control_socket.fd < 0 ||
+        ::getsockname(control_socket.fd, reinterpret_cast<sockaddr*>(&now), &length) != 0 ||
+        now.sin_family != AF_INET || !same_local(now, control_socket.local) ||
+        (::shutdown(control_socket.fd, SHUT_WR) != 0 && errno != ENOTCONN)) {
+      util::log_warn(
+          "{}: does not answer, and its control socket was not found: closing waits "
+          "for Aravis's timeouts (several seconds)",
+          where());
+    }
+  }
+
   void close() noexcept {
-    stop();
+    // Not asked again when stop() just found it silent (sensor_node stops, then destroys).
+    const bool camera_answers = !found_silent && answers();
+    found_silent = false;
+    stop_acquisition(camera_answers);
     if (stream) {
       guint64 completed = 0;
       guint64 failures = 0;
@@ -460,6 +564,7 @@ struct AravisCamera::Impl {
       closed_missing_packets +=
           arv_stream_get_info_uint64_by_name(stream.get(), "n_missing_packets");
     }
+    if (!camera_answers && is_gv) stop_talking_to_device();
     // Never from the stream's own callback: dropping its last reference joins its thread.
     stream.reset();
     slots.reset();

@@ -227,5 +227,27 @@ TEST_F(CameraStops, StalledCameraIsReportedAndResumes) {
       static_cast<unsigned long long>(lines.front().camera_restarts));
 }
 
+// sensor_node told to stop after its camera is gone exits promptly: closing a camera that no
+// longer answers used to wait for three of Aravis's GVCP commands (2.5 s each) after the frame
+// wait and the 300 ms probe, about 8.3 s for this one camera (15 s for the rig's two). The bound
+// is generous for a loaded machine; one of those commands waited for again would still fit, the
+// whole teardown would not.
+TEST_F(CameraStops, ExitsPromptlyOnceTheCameraIsGone) {
+  start_camera();
+  start_sensor_node();
+  ASSERT_TRUE(pump_until([&] { return complete_from(0) >= 20; }, 20s)) << context();
+
+  ASSERT_EQ(::kill(camera_->pid(), SIGKILL), 0);
+  ASSERT_EQ(camera_->wait_exit(5s), 128 + SIGKILL);
+  const std::int64_t stopped = util::monotonic_ns();
+  EXPECT_EQ(node_->stop(10s), 0) << context();
+  const double exit_s = seconds_since(stopped);
+  log_ = node_->output();
+  EXPECT_EQ(sensor_node_exit_lines(log_).size(), 1U) << context();
+  EXPECT_LT(exit_s, 5.0) << context();
+  RecordProperty("exit_ms", static_cast<int>(exit_s * 1000));
+  std::printf("camera killed, then sensor_node stopped: it exited %.2f s after SIGTERM\n", exit_s);
+}
+
 }  // namespace
 }  // namespace tactile::faults
