@@ -374,6 +374,8 @@ class HandNodeRun {
     while (arm.receive(peer, payload, 50ms)) {
       if (wire::decode(payload, env) == wire::DecodeStatus::kOk && env.has_arm_command() &&
           wire::read_arm_command(env.arm_command(), kIds, cmd) == wire::DecodeStatus::kOk) {
+        // The Stop on the way out often lands here (a loaded machine): it is the last command.
+        r.last_command_answers = cmd.answers.count;
         r.commands.push_back(cmd.command.kind);
       }
     }
