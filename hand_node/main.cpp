@@ -1,14 +1,13 @@
 // hand_node: subscribes to the fingertips' TactileFrames, runs the flags, the finger speed
 // estimator and the grasp-move-twist sequencers, and commands the arm controller.
 #include <CLI/CLI.hpp>
-#include <cstdio>
 
 #include "src/hand_config.hpp"
 #include "src/hand_node.hpp"
+#include "tactile/cli/run.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/realtime.hpp"
 #include "tactile/util/stop.hpp"
-#include "tactile/util/text.hpp"
 #include "tactile/wire/envelope.hpp"
 
 namespace {
@@ -32,14 +31,7 @@ int run(int argc, char** argv) {
                  "arm controller endpoint (default tcp://127.0.0.1:5556 or the file's)");
   app.add_option("--events", events, "publish events on this endpoint (e.g. tcp://*:5558)");
   app.add_option("--log-level", log_level, "debug, info, warn or error")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "hand_node: %s (try --help)\n", e.what());
-    return 2;
-  }
-  try {
+  return tactile::cli::run(app, argc, argv, [&] {
     tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
     std::vector<std::string> warnings;
     tactile::hand::HandConfig cfg = tactile::hand::load_hand_config(config_path, &warnings);
@@ -66,11 +58,8 @@ int run(int argc, char** argv) {
         tactile::util::log_error("task aborted");
         return 3;
     }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "hand_node: %s\n", tactile::util::one_line(e.what()).c_str());
-    return 1;
-  }
-  return 0;
+    return 0;
+  });
 }
 
 }  // namespace

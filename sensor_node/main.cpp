@@ -2,17 +2,16 @@
 // sensing element and publishes TactileFrames over ZeroMQ.
 #include <CLI/CLI.hpp>
 #include <atomic>
-#include <cstdio>
 #include <thread>
 
 #include "src/pipeline.hpp"
 #include "src/sensor_config.hpp"
+#include "tactile/cli/run.hpp"
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/realtime.hpp"
 #include "tactile/util/stop.hpp"
-#include "tactile/util/text.hpp"
 #include "tactile/wire/envelope.hpp"
 
 namespace {
@@ -55,32 +54,21 @@ int run(int argc, char** argv) {
                  "write this file once every camera's frames are measured and published, and "
                  "remove it on exit (a health check, docker/compose.yaml)");
   app.add_option("--log-level", log_level, "debug, info, warn or error")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "sensor_node: %s (try --help)\n", e.what());
-    return 2;
-  }
-  try {
+  return tactile::cli::run(app, argc, argv, [&] {
     tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
     std::vector<std::string> warnings;
     SensorConfig cfg = tactile::sensor::default_sensor_config();
     if (!config_path.empty()) {
       cfg = tactile::sensor::load_sensor_config(config_path, &warnings, state_dir);
     } else if (camera.empty() || calibration.empty()) {
-      std::fprintf(stderr,
-                   "sensor_node: give --config FILE, or --camera and --calibration (try --help)\n");
-      return 2;
+      throw tactile::cli::UsageError("give --config FILE, or --camera and --calibration");
     }
     const bool one_camera =
         !camera.empty() || !calibration.empty() || !reference.empty() || fps > 0;
     if (one_camera) {
       if (cfg.cameras.size() > 1) {
-        std::fprintf(stderr,
-                     "sensor_node: --camera, --calibration, --reference and --fps need a "
-                     "one-camera configuration\n");
-        return 2;
+        throw tactile::cli::UsageError(
+            "--camera, --calibration, --reference and --fps need a one-camera configuration");
       }
       if (cfg.cameras.empty()) cfg.cameras.emplace_back();
       CameraConfig& c = cfg.cameras.front();
@@ -153,10 +141,7 @@ int run(int argc, char** argv) {
           p->counters().not_measured.load(), p->counters().camera_restarts.load());
     }
     return code;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "sensor_node: %s\n", tactile::util::one_line(e.what()).c_str());
-    return 1;
-  }
+  });
 }
 
 }  // namespace

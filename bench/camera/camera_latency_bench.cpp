@@ -26,7 +26,9 @@
 #include "tactile/camera/aravis_camera.hpp"
 #include "tactile/camera/fake_gv_camera.hpp"
 #include "tactile/camera/private_network.hpp"
+#include "tactile/cli/run.hpp"
 #include "tactile/util/clock.hpp"
+#include "tactile/util/log.hpp"
 
 namespace tactile::camera {
 namespace {
@@ -241,6 +243,7 @@ int run(const Settings& s) {
 }  // namespace tactile::camera
 
 int main(int argc, char** argv) {
+  tactile::util::set_program_name("tactile_camera_latency_bench");
   tactile::camera::Settings s;
   CLI::App app(
       "GigE Vision fill -> receive latency and CPU of tactile::camera (FakeGvCamera -> "
@@ -252,19 +255,5 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 2));
   app.add_option("--format", s.format, "Mono8 or Mono16");
   app.add_option("--packet-size", s.packet_size, "GVSP packet size")->check(CLI::Range(576, 65500));
-  // Usage errors exit 2 and --help 0, as every program's (docs/tools.md, "Exit status"); CLI11's
-  // own codes (CLI11_PARSE) differ by error.
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "tactile_camera_latency_bench: %s (try --help)\n", e.what());
-    return 2;
-  }
-  try {
-    return tactile::camera::run(s);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactile_camera_latency_bench: %s\n", e.what());
-    return 1;
-  }
+  return tactile::cli::run(app, argc, argv, [&] { return tactile::camera::run(s); });
 }

@@ -13,7 +13,9 @@
 #include <vector>
 
 #include "harness.hpp"
+#include "tactile/cli/run.hpp"
 #include "tactile/util/files.hpp"
+#include "tactile/util/log.hpp"
 
 namespace tactile::bench {
 namespace {
@@ -97,97 +99,86 @@ int run(int argc, char** argv) {
   bool no_slips = false;
   app.add_flag("--no-accuracy", no_accuracy, "skip the accuracy grid");
   app.add_flag("--no-slips", no_slips, "skip the slip statistics");
-  // Usage errors exit 2 and --help 0, as every program's (docs/tools.md, "Exit status"); CLI11's
-  // own codes (CLI11_PARSE) differ by error.
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "extraction_accuracy: %s (try --help)\n", e.what());
-    return 2;
-  }
-  if (quick) {
-    frames = 120;
-    slip_frames = 600;
-    trials = 2000;
-  }
-  const std::filesystem::path dir(out);
-  const std::vector<Method> all = methods();
+  return cli::run(app, argc, argv, [&] {
+    if (quick) {
+      frames = 120;
+      slip_frames = 600;
+      trials = 2000;
+    }
+    const std::filesystem::path dir(out);
+    const std::vector<Method> all = methods();
 
-  if (!no_accuracy) {
-    std::ostringstream acc;
-    acc << "method,shape,sigma_px,pnr,depth,shot_noise,peak,noise_sigma,frames,samples,misses,"
-           "rms_x_px,rms_y_px,rms_px,bias_px,bias_se_px,crb_x_px,crb_y_px,crb_simple_px,"
-           "ratio_crb\n";
-    std::vector<Plan> p = plan(frames);
-    if (target_grid_only) p.resize(20);  // plan() lists the target grid first
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      const SpotSetting& s = p[i].setting;
-      std::fprintf(stderr, "accuracy %zu/%zu: %s sigma %.1f pnr %.0f %d-bit%s, %d frames\n", i + 1,
-                   p.size(), s.shape_name().c_str(), s.sigma, s.pnr, s.depth,
-                   s.shot_noise ? " shot" : "", p[i].frames);
-      for (const AccuracyRow& r : run_accuracy(s, all, p[i].frames, seed + i)) {
-        acc << r.method << ',' << s.shape_name() << ',' << num(s.sigma) << ',' << num(s.pnr) << ','
-            << s.depth << ',' << (s.shot_noise ? 1 : 0) << ',' << num(s.peak()) << ','
-            << num(s.noise_sigma()) << ',' << r.frames << ',' << r.samples << ',' << r.misses << ','
-            << num(r.rms_x) << ',' << num(r.rms_y) << ',' << num(r.rms()) << ',' << num(r.bias)
-            << ',' << num(r.bias_se) << ',' << num(r.crb.x) << ',' << num(r.crb.y) << ','
-            << num(r.crb_simple) << ',' << num(r.ratio()) << '\n';
+    if (!no_accuracy) {
+      std::ostringstream acc;
+      acc << "method,shape,sigma_px,pnr,depth,shot_noise,peak,noise_sigma,frames,samples,misses,"
+             "rms_x_px,rms_y_px,rms_px,bias_px,bias_se_px,crb_x_px,crb_y_px,crb_simple_px,"
+             "ratio_crb\n";
+      std::vector<Plan> p = plan(frames);
+      if (target_grid_only) p.resize(20);  // plan() lists the target grid first
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        const SpotSetting& s = p[i].setting;
+        std::fprintf(stderr, "accuracy %zu/%zu: %s sigma %.1f pnr %.0f %d-bit%s, %d frames\n",
+                     i + 1, p.size(), s.shape_name().c_str(), s.sigma, s.pnr, s.depth,
+                     s.shot_noise ? " shot" : "", p[i].frames);
+        for (const AccuracyRow& r : run_accuracy(s, all, p[i].frames, seed + i)) {
+          acc << r.method << ',' << s.shape_name() << ',' << num(s.sigma) << ',' << num(s.pnr)
+              << ',' << s.depth << ',' << (s.shot_noise ? 1 : 0) << ',' << num(s.peak()) << ','
+              << num(s.noise_sigma()) << ',' << r.frames << ',' << r.samples << ',' << r.misses
+              << ',' << num(r.rms_x) << ',' << num(r.rms_y) << ',' << num(r.rms()) << ','
+              << num(r.bias) << ',' << num(r.bias_se) << ',' << num(r.crb.x) << ',' << num(r.crb.y)
+              << ',' << num(r.crb_simple) << ',' << num(r.ratio()) << '\n';
+        }
+      }
+      util::write_file_atomic(dir / "accuracy.csv", acc.str());
+    }
+    if (no_slips) return 0;
+
+    std::ostringstream fs;
+    fs << "method,noise_sigma,peak,element_frames,false_slips,rate,centroid_sigma_px,"
+          "predicted_rate\n";
+    struct Still {
+      double noise;
+      double peak;
+      int frames;
+    };
+    std::vector<Still> still;
+    for (double noise : {0.5, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0})
+      still.push_back({noise, 100, noise == 2.0 ? slip_frames : std::max(50, slip_frames / 5)});
+    for (double peak : {30.0, 50.0, 200.0})
+      still.push_back({2.0, peak, std::max(50, slip_frames / 5)});
+    for (std::size_t i = 0; i < still.size(); ++i) {
+      std::fprintf(stderr, "still contact: noise %.1f peak %.0f, %d frames\n", still[i].noise,
+                   still[i].peak, still[i].frames);
+      for (const FalseSlipRow& r :
+           run_false_slips(all, still[i].noise, still[i].peak, still[i].frames, seed + 1000 + i)) {
+        fs << r.method << ',' << num(r.noise_sigma) << ',' << num(r.peak) << ',' << r.element_frames
+           << ',' << r.false_slips << ',' << num(r.rate()) << ',' << num(r.centroid_sigma_px) << ','
+           << num(r.predicted) << '\n';
       }
     }
-    util::write_file_atomic(dir / "accuracy.csv", acc.str());
-  }
-  if (no_slips) return 0;
+    util::write_file_atomic(dir / "false_slips.csv", fs.str());
 
-  std::ostringstream fs;
-  fs << "method,noise_sigma,peak,element_frames,false_slips,rate,centroid_sigma_px,"
-        "predicted_rate\n";
-  struct Still {
-    double noise;
-    double peak;
-    int frames;
-  };
-  std::vector<Still> still;
-  for (double noise : {0.5, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0})
-    still.push_back({noise, 100, noise == 2.0 ? slip_frames : std::max(50, slip_frames / 5)});
-  for (double peak : {30.0, 50.0, 200.0})
-    still.push_back({2.0, peak, std::max(50, slip_frames / 5)});
-  for (std::size_t i = 0; i < still.size(); ++i) {
-    std::fprintf(stderr, "still contact: noise %.1f peak %.0f, %d frames\n", still[i].noise,
-                 still[i].peak, still[i].frames);
-    for (const FalseSlipRow& r :
-         run_false_slips(all, still[i].noise, still[i].peak, still[i].frames, seed + 1000 + i)) {
-      fs << r.method << ',' << num(r.noise_sigma) << ',' << num(r.peak) << ',' << r.element_frames
-         << ',' << r.false_slips << ',' << num(r.rate()) << ',' << num(r.centroid_sigma_px) << ','
-         << num(r.predicted) << '\n';
+    std::ostringstream ds;
+    ds << "method,speed_dr,trials,within_1,within_2,undetected,early,p50,p99,max\n";
+    for (double speed : {1.5, 3.0, 10.0}) {
+      std::fprintf(stderr, "slip onset: %.1f dr per frame, %d trials\n", speed, trials);
+      for (const DelayRow& r :
+           run_delays(all, speed, trials, seed + 2000 + static_cast<int>(speed))) {
+        ds << r.method << ',' << num(r.speed_dr) << ',' << r.trials << ',' << r.within_1 << ','
+           << r.within_2 << ',' << r.undetected << ',' << r.early << ',' << num(r.p50) << ','
+           << num(r.p99) << ',' << num(r.max) << '\n';
+      }
     }
-  }
-  util::write_file_atomic(dir / "false_slips.csv", fs.str());
-
-  std::ostringstream ds;
-  ds << "method,speed_dr,trials,within_1,within_2,undetected,early,p50,p99,max\n";
-  for (double speed : {1.5, 3.0, 10.0}) {
-    std::fprintf(stderr, "slip onset: %.1f dr per frame, %d trials\n", speed, trials);
-    for (const DelayRow& r :
-         run_delays(all, speed, trials, seed + 2000 + static_cast<int>(speed))) {
-      ds << r.method << ',' << num(r.speed_dr) << ',' << r.trials << ',' << r.within_1 << ','
-         << r.within_2 << ',' << r.undetected << ',' << r.early << ',' << num(r.p50) << ','
-         << num(r.p99) << ',' << num(r.max) << '\n';
-    }
-  }
-  util::write_file_atomic(dir / "slip_delay.csv", ds.str());
-  std::fprintf(stderr, "wrote the CSV files in %s\n", out.c_str());
-  return 0;
+    util::write_file_atomic(dir / "slip_delay.csv", ds.str());
+    std::fprintf(stderr, "wrote the CSV files in %s\n", out.c_str());
+    return 0;
+  });
 }
 
 }  // namespace
 }  // namespace tactile::bench
 
 int main(int argc, char** argv) {
-  try {
-    return tactile::bench::run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "extraction_accuracy: %s\n", e.what());
-    return 1;
-  }
+  tactile::util::set_program_name("extraction_accuracy");
+  return tactile::bench::run(argc, argv);
 }

@@ -20,8 +20,10 @@
 #include <vector>
 
 #include "scene.hpp"
+#include "tactile/cli/run.hpp"
 #include "tactile/plot/figure.hpp"
 #include "tactile/util/files.hpp"
+#include "tactile/util/log.hpp"
 
 namespace tactile::bench {
 namespace {
@@ -150,21 +152,7 @@ struct Point {
   bool front = false;
 };
 
-int run(int argc, char** argv) {
-  CLI::App app{"Pareto table, plot and summary of the extraction benchmarks"};
-  std::string in = "out/bench";
-  std::string out;
-  app.add_option("--in", in, "directory with the benchmark outputs")->capture_default_str();
-  app.add_option("--out", out, "output directory (default: --in)");
-  // Usage errors exit 2 and --help 0, as every program's (docs/tools.md, "Exit status"); CLI11's
-  // own codes (CLI11_PARSE) differ by error.
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "extraction_report: %s (try --help)\n", e.what());
-    return 2;
-  }
+int report(const std::string& in, std::string out) {
   if (out.empty()) out = in;
   const fs::path din(in);
   const fs::path dout(out);
@@ -445,14 +433,19 @@ int run(int argc, char** argv) {
   return 0;
 }
 
+int run(int argc, char** argv) {
+  CLI::App app{"Pareto table, plot and summary of the extraction benchmarks"};
+  std::string in = "out/bench";
+  std::string out;
+  app.add_option("--in", in, "directory with the benchmark outputs")->capture_default_str();
+  app.add_option("--out", out, "output directory (default: --in)");
+  return cli::run(app, argc, argv, [&] { return report(in, out); });
+}
+
 }  // namespace
 }  // namespace tactile::bench
 
 int main(int argc, char** argv) {
-  try {
-    return tactile::bench::run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "extraction_report: %s\n", e.what());
-    return 1;
-  }
+  tactile::util::set_program_name("extraction_report");
+  return tactile::bench::run(argc, argv);
 }

@@ -46,9 +46,11 @@
 
 #include "tactile/camera/aravis_camera.hpp"
 #include "tactile/camera/private_network.hpp"
+#include "tactile/cli/run.hpp"
 #include "tactile/plot/figure.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/files.hpp"
+#include "tactile/util/log.hpp"
 #include "tactile/util/realtime.hpp"
 #include "tactile/util/stop.hpp"
 #include "tactile/v1/tactile.pb.h"
@@ -1865,6 +1867,7 @@ int run(const Settings& s, const fs::path& self) {
 }  // namespace tactile::bench
 
 int main(int argc, char** argv) {
+  tactile::util::set_program_name("tactile_system_latency_bench");
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
@@ -1926,20 +1929,9 @@ int main(int argc, char** argv) {
                  "configuration's realtime section), and the transport alone's receivers and "
                  "ZeroMQ ends likewise; needs root or CAP_SYS_NICE (default 0: the normal policy)")
       ->check(CLI::Range(0, 98));
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "tactile_system_latency_bench: %s (see --help)\n", e.what());
-    return 2;
-  }
-  try {
+  return tactile::cli::run(app, argc, argv, [&] {
     // Refused now rather than after the first run: try it once on this thread and drop it.
     { const tactile::bench::FifoScheduling probe(s.realtime_priority); }
     return tactile::bench::run(s, self);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactile_system_latency_bench: %s\n", e.what());
-    return 1;
-  }
+  });
 }

@@ -5,10 +5,11 @@
 #include <chrono>
 #include <cstdio>
 #include <ctime>
-#include <exception>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 
+#include "tactile/cli/run.hpp"
 #include "tactile/rig/control_link.hpp"
 #include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/plots.hpp"
@@ -18,7 +19,6 @@
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
-#include "tactile/util/text.hpp"
 #include "tactile/wire/envelope.hpp"
 #include "tactile/wire/security.hpp"
 
@@ -104,144 +104,133 @@ int run(int argc, char** argv) {
   app.add_option("--write-configs", write_configs,
                  "write left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml for this "
                  "scenario into DIR and exit");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "rig: %s (see --help)\n", e.what());
-    return 2;
-  }
-  tactile::util::set_program_name("rig");
-  try {
-    tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "rig: --log-level: %s\n", e.what());
-    return 2;
-  }
-  const tactile::rig::Scenario scenario = tactile::rig::load_scenario(scenario_path);
-  if (!cameras.empty()) {
-    const auto comma = cameras.find(',');
-    if (comma == std::string::npos) {
-      std::fprintf(stderr, "rig: --cameras needs two addresses, left,right; got '%s'\n",
-                   cameras.c_str());
-      return 2;
+  return tactile::cli::run(app, argc, argv, [&] {
+    try {
+      tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
+    } catch (const std::invalid_argument& e) {
+      throw tactile::cli::UsageError(std::string("--log-level: ") + e.what());
     }
-    rt.camera_addresses = {cameras.substr(0, comma), cameras.substr(comma + 1)};
-  }
-  if (!observe_frames.empty()) rt.observe_frames = observe_frames;
-  if (!arm_key.empty()) {
-    tactile::wire::ServerSecurity sec{tactile::wire::load_key_pair(arm_key), {}};
-    for (const std::string& c : arm_clients)
-      sec.authorized_clients.push_back(tactile::wire::load_public_key(c));
-    rt.arm_security = std::move(sec);
-  } else if (!arm_clients.empty()) {
-    std::fprintf(stderr, "rig: --arm-client needs --arm-key\n");
-    return 2;
-  }
-  if (!observe_key.empty()) {
-    // sensor_node's PUB lets in any client that knows its public key: the rig's own pair is new.
-    rt.observe_security = tactile::wire::ClientSecurity{
-        tactile::wire::generate_keypair(), tactile::wire::load_public_key(observe_key)};
-  }
-  if (!write_configs.empty()) {
-    tactile::rig::write_node_configs(scenario, write_configs, rt);
+    const tactile::rig::Scenario scenario = tactile::rig::load_scenario(scenario_path);
+    if (!cameras.empty()) {
+      const auto comma = cameras.find(',');
+      if (comma == std::string::npos) {
+        throw tactile::cli::UsageError("--cameras needs two addresses, left,right; got '" +
+                                       cameras + "'");
+      }
+      rt.camera_addresses = {cameras.substr(0, comma), cameras.substr(comma + 1)};
+    }
+    if (!observe_frames.empty()) rt.observe_frames = observe_frames;
+    if (!arm_key.empty()) {
+      tactile::wire::ServerSecurity sec{tactile::wire::load_key_pair(arm_key), {}};
+      for (const std::string& c : arm_clients)
+        sec.authorized_clients.push_back(tactile::wire::load_public_key(c));
+      rt.arm_security = std::move(sec);
+    } else if (!arm_clients.empty()) {
+      throw tactile::cli::UsageError("--arm-client needs --arm-key");
+    }
+    if (!observe_key.empty()) {
+      // sensor_node's PUB lets in any client that knows its public key: the rig's own pair is new.
+      rt.observe_security = tactile::wire::ClientSecurity{
+          tactile::wire::generate_keypair(), tactile::wire::load_public_key(observe_key)};
+    }
+    if (!write_configs.empty()) {
+      tactile::rig::write_node_configs(scenario, write_configs, rt);
+      tactile::util::log_info(
+          "wrote left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml into {}",
+          write_configs);
+      return 0;
+    }
+    // The results are written at the end of a run that may last minutes: a folder that cannot take
+    // them is refused now, not found out then.
+    for (const std::string& file : {report_path, series_path, timing_path}) {
+      if (!file.empty())
+        tactile::util::check_writable_dir(std::filesystem::path(file).parent_path());
+    }
+    for (const std::string& dir : {plots_dir, calibration_dir}) {
+      if (!dir.empty()) tactile::util::check_writable_dir(dir);
+    }
+    if (!lockstep) {
+      tactile::util::install_stop_handlers();
+      tactile::wire::install_protobuf_log_handler();
+      rt.record_series = !plots_dir.empty() || !series_path.empty();
+      tactile::util::ReadyFile ready(ready_path);
+      rt.on_ready = [&ready] { ready.mark_ready(); };
+      const tactile::rig::RealtimeResult result = tactile::rig::run_realtime(scenario, rt);
+      const std::string json = tactile::rig::report_json(result.run.report);
+      if (!report_path.empty()) {
+        tactile::util::write_file_atomic(report_path, json);
+        tactile::util::log_info("report written to {}", report_path);
+      } else {
+        std::fputs(json.c_str(), stdout);
+      }
+      if (!series_path.empty()) {
+        tactile::util::write_file_atomic(series_path, tactile::rig::series_csv(result.run.series));
+      }
+      if (!plots_dir.empty()) {
+        const auto controller = tactile::rig::scenario_controller_config(scenario);
+        for (const auto& path : tactile::rig::write_plots(result.run, controller, plots_dir)) {
+          tactile::util::log_info("wrote {}", path.string());
+        }
+        if (!result.latency_ms.empty()) {
+          tactile::util::log_info(
+              "wrote {}", tactile::rig::write_latency_plot(result.latency_ms, plots_dir).string());
+        }
+      }
+      return 0;
+    }
+    tactile::rig::LockstepOptions options;
+    options.dt_s = dt_s;
+    options.record_series = !plots_dir.empty() || !series_path.empty();
+    const auto start = std::chrono::steady_clock::now();
+    const std::clock_t cpu_start = std::clock();
+    const tactile::rig::LockstepResult result = tactile::rig::run_lockstep(scenario, options);
+    const double wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+    const double sim_s = result.report.sim_time_s;
+    const double ratio = sim_s > 0 ? wall_s / sim_s : 0.0;
+    const double cpu_ratio = sim_s > 0 ? cpu_s / sim_s : 0.0;
     tactile::util::log_info(
-        "wrote left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml into {}", write_configs);
-    return 0;
-  }
-  // The results are written at the end of a run that may last minutes: a folder that cannot take
-  // them is refused now, not found out then.
-  for (const std::string& file : {report_path, series_path, timing_path}) {
-    if (!file.empty()) tactile::util::check_writable_dir(std::filesystem::path(file).parent_path());
-  }
-  for (const std::string& dir : {plots_dir, calibration_dir}) {
-    if (!dir.empty()) tactile::util::check_writable_dir(dir);
-  }
-  if (!lockstep) {
-    tactile::util::install_stop_handlers();
-    tactile::wire::install_protobuf_log_handler();
-    rt.record_series = !plots_dir.empty() || !series_path.empty();
-    tactile::util::ReadyFile ready(ready_path);
-    rt.on_ready = [&ready] { ready.mark_ready(); };
-    const tactile::rig::RealtimeResult result = tactile::rig::run_realtime(scenario, rt);
-    const std::string json = tactile::rig::report_json(result.run.report);
+        "simulated {:.2f} s in {:.2f} s wall ({:.3f} of simulated time), {:.2f} s CPU ({:.3f}), {}",
+        sim_s, wall_s, ratio, cpu_s, cpu_ratio, result.report.end_reason);
+
+    const std::string json = tactile::rig::report_json(result.report);
     if (!report_path.empty()) {
       tactile::util::write_file_atomic(report_path, json);
-      tactile::util::log_info("report written to {}", report_path);
     } else {
       std::fputs(json.c_str(), stdout);
     }
+    if (!timing_path.empty()) {
+      tactile::util::write_file_atomic(
+          timing_path,
+          fmt::format("{{\"wall_s\": {:.4f}, \"cpu_s\": {:.4f}, \"sim_time_s\": {:.4f}, "
+                      "\"wall_over_sim\": {:.5f}, \"cpu_over_sim\": {:.5f}}}\n",
+                      wall_s, cpu_s, sim_s, ratio, cpu_ratio));
+    }
+    if (!calibration_dir.empty()) {
+      for (const std::filesystem::path& path :
+           tactile::rig::save_calibrations(calibration_dir, result.calibrations)) {
+        tactile::util::log_info("wrote {}", path.string());
+      }
+    }
     if (!series_path.empty()) {
-      tactile::util::write_file_atomic(series_path, tactile::rig::series_csv(result.run.series));
+      tactile::util::write_file_atomic(series_path, tactile::rig::series_csv(result.series));
+      std::filesystem::path mismatch_path(series_path);
+      mismatch_path.replace_extension(".mismatches.csv");
+      tactile::util::write_file_atomic(mismatch_path, tactile::rig::mismatches_csv(result.series));
     }
     if (!plots_dir.empty()) {
       const auto controller = tactile::rig::scenario_controller_config(scenario);
-      for (const auto& path : tactile::rig::write_plots(result.run, controller, plots_dir)) {
+      for (const auto& path : tactile::rig::write_plots(result, controller, plots_dir))
         tactile::util::log_info("wrote {}", path.string());
-      }
-      if (!result.latency_ms.empty()) {
-        tactile::util::log_info(
-            "wrote {}", tactile::rig::write_latency_plot(result.latency_ms, plots_dir).string());
-      }
     }
     return 0;
-  }
-  tactile::rig::LockstepOptions options;
-  options.dt_s = dt_s;
-  options.record_series = !plots_dir.empty() || !series_path.empty();
-  const auto start = std::chrono::steady_clock::now();
-  const std::clock_t cpu_start = std::clock();
-  const tactile::rig::LockstepResult result = tactile::rig::run_lockstep(scenario, options);
-  const double wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
-  const double sim_s = result.report.sim_time_s;
-  const double ratio = sim_s > 0 ? wall_s / sim_s : 0.0;
-  const double cpu_ratio = sim_s > 0 ? cpu_s / sim_s : 0.0;
-  tactile::util::log_info(
-      "simulated {:.2f} s in {:.2f} s wall ({:.3f} of simulated time), {:.2f} s CPU ({:.3f}), {}",
-      sim_s, wall_s, ratio, cpu_s, cpu_ratio, result.report.end_reason);
-
-  const std::string json = tactile::rig::report_json(result.report);
-  if (!report_path.empty()) {
-    tactile::util::write_file_atomic(report_path, json);
-  } else {
-    std::fputs(json.c_str(), stdout);
-  }
-  if (!timing_path.empty()) {
-    tactile::util::write_file_atomic(
-        timing_path, fmt::format("{{\"wall_s\": {:.4f}, \"cpu_s\": {:.4f}, \"sim_time_s\": {:.4f}, "
-                                 "\"wall_over_sim\": {:.5f}, \"cpu_over_sim\": {:.5f}}}\n",
-                                 wall_s, cpu_s, sim_s, ratio, cpu_ratio));
-  }
-  if (!calibration_dir.empty()) {
-    for (const std::filesystem::path& path :
-         tactile::rig::save_calibrations(calibration_dir, result.calibrations)) {
-      tactile::util::log_info("wrote {}", path.string());
-    }
-  }
-  if (!series_path.empty()) {
-    tactile::util::write_file_atomic(series_path, tactile::rig::series_csv(result.series));
-    std::filesystem::path mismatch_path(series_path);
-    mismatch_path.replace_extension(".mismatches.csv");
-    tactile::util::write_file_atomic(mismatch_path, tactile::rig::mismatches_csv(result.series));
-  }
-  if (!plots_dir.empty()) {
-    const auto controller = tactile::rig::scenario_controller_config(scenario);
-    for (const auto& path : tactile::rig::write_plots(result, controller, plots_dir))
-      tactile::util::log_info("wrote {}", path.string());
-  }
-  return 0;
+  });
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "rig: %s\n", tactile::util::one_line(e.what()).c_str());
-    return 1;
-  }
+  tactile::util::set_program_name("rig");
+  return run(argc, argv);
 }

@@ -7,16 +7,17 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "calibrate.hpp"
+#include "tactile/cli/run.hpp"
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/pgm.hpp"
-#include "tactile/util/text.hpp"
 
 namespace {
 
@@ -26,9 +27,7 @@ using tactile::util::log_info;
 using tactile::util::log_warn;
 
 // A bad option or option value: exit status 2.
-struct UsageError : std::invalid_argument {
-  using std::invalid_argument::invalid_argument;
-};
+using tactile::cli::UsageError;
 
 // Logs "N of M frames" every two seconds while long work goes on, and once at the end.
 class ProgressLog {
@@ -401,26 +400,17 @@ int run(int argc, char** argv) {
   add_layout(app, layout);
   add_measure(app, measure);
   add_fit(app, fit);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "tactile_calibrate: %s (try --help)\n",
-                 tactile::util::one_line(e.what()).c_str());
-    return 2;
-  }
-  try {
-    if (app.got_subcommand("layout")) return run_layout(layout);
-    if (app.got_subcommand("measure")) return run_measure(measure);
-    return run_fit(fit);
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "tactile_calibrate: %s (try --help)\n",
-                 tactile::util::one_line(e.what()).c_str());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactile_calibrate: %s\n", tactile::util::one_line(e.what()).c_str());
-    return 1;
-  }
+  return tactile::cli::run(app, argc, argv, [&] {
+    // The calibration code checks its option values as it starts (a bad --min-area,
+    // --monotone-tolerance...): its std::invalid_argument is a usage error too.
+    try {
+      if (app.got_subcommand("layout")) return run_layout(layout);
+      if (app.got_subcommand("measure")) return run_measure(measure);
+      return run_fit(fit);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(e.what());
+    }
+  });
 }
 
 }  // namespace

@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "tactile/cli/run.hpp"
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/extractor.hpp"
 #include "tactile/util/json.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/pgm.hpp"
-#include "tactile/util/text.hpp"
 
 namespace {
 
@@ -191,17 +191,5 @@ int main(int argc, char** argv) {
   app.add_flag("--no-reference-check", opt.no_reference_check,
                "accept a reference that shows a spot on an element");
   app.add_option("frames", opt.frames, "frames to measure (P5 PGM), in order");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "tactile_extract: %s (try --help)\n", e.what());
-    return 2;
-  }
-  try {
-    return run(opt);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactile_extract: %s\n", tactile::util::one_line(e.what()).c_str());
-    return 1;
-  }
+  return tactile::cli::run(app, argc, argv, [&] { return run(opt); });
 }

@@ -2,10 +2,12 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
-#include "tactile/util/text.hpp"
+#include "tactile/cli/run.hpp"
+#include "tactile/util/log.hpp"
 #include "tactile/wire/security.hpp"
 
 int main(int argc, char** argv) {
+  tactile::util::set_program_name("tactile_keygen");
   std::string dir = ".";
   std::vector<std::string> names;
   CLI::App app{
@@ -14,14 +16,7 @@ int main(int argc, char** argv) {
       "only) and DIR/NAME.pub (the public key, to give to the peers). Never overwrites a file."};
   app.add_option("--dir", dir, "folder for the key files")->capture_default_str();
   app.add_option("names", names, "key names, e.g. sensor hand arm")->required();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "tactile_keygen: %s (try --help)\n", e.what());
-    return 2;
-  }
-  try {
+  return tactile::cli::run(app, argc, argv, [&] {
     if (!tactile::wire::curve_available())
       throw std::runtime_error("this libzmq was built without CURVE support");
     for (const auto& name : names) {
@@ -29,9 +24,6 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "tactile_keygen: wrote %s/%s.key (keep secret) and %s/%s.pub\n",
                    dir.c_str(), name.c_str(), dir.c_str(), name.c_str());
     }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactile_keygen: %s\n", tactile::util::one_line(e.what()).c_str());
-    return 1;
-  }
-  return 0;
+    return 0;
+  });
 }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "dashboard.hpp"
+#include "tactile/cli/run.hpp"
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/recording/sources.hpp"
 #include "tactile/util/clock.hpp"
@@ -211,21 +212,9 @@ int main(int argc, char** argv) {
   app.add_flag("--screen", opt.screen, "screen mode even when standard output is not a terminal");
   app.add_flag("--no-color", opt.no_color, "no colours (also when NO_COLOR is set)");
   app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "tactile_live: %s (try --help)\n", e.what());
-    return 2;
-  }
-  if (opt.endpoints.empty() && opt.curve.empty()) {
-    std::fprintf(stderr, "tactile_live: give at least one endpoint to subscribe to (try --help)\n");
-    return 2;
-  }
-  try {
+  return tactile::cli::run(app, argc, argv, [&] {
+    if (opt.endpoints.empty() && opt.curve.empty())
+      throw tactile::cli::UsageError("give at least one endpoint to subscribe to");
     return run(opt);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactile_live: %s\n", e.what());
-    return 1;
-  }
+  });
 }

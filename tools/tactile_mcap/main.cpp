@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <string>
 
+#include "tactile/cli/run.hpp"
 #include "tactile/mcap/export.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/files.hpp"
@@ -95,17 +96,5 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--overwrite", opt.overwrite, "replace an existing output file");
   app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "tactile_mcap: %s (try --help)\n", e.what());
-    return 2;
-  }
-  try {
-    return run(opt);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactile_mcap: %s\n", e.what());
-    return 1;
-  }
+  return tactile::cli::run(app, argc, argv, [&] { return run(opt); });
 }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "plot_data.hpp"
+#include "tactile/cli/run.hpp"
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/recording/log_reader.hpp"
 #include "tactile/util/clock.hpp"
@@ -171,17 +172,5 @@ int main(int argc, char** argv) {
   app.add_option("--width", opt.width, "picture width in pixels")->capture_default_str();
   app.add_option("--height", opt.height, "picture height in pixels")->capture_default_str();
   app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "tactile_plot: %s (try --help)\n", e.what());
-    return 2;
-  }
-  try {
-    return run(opt);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactile_plot: %s\n", e.what());
-    return 1;
-  }
+  return tactile::cli::run(app, argc, argv, [&] { return run(opt); });
 }

@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "tactile/cli/run.hpp"
 #include "tactile/recording/log_writer.hpp"
 #include "tactile/recording/sources.hpp"
 #include "tactile/util/clock.hpp"
@@ -283,22 +284,9 @@ int main(int argc, char** argv) {
                  "seconds of the start (the log is still closed properly; 0: wait forever)")
       ->capture_default_str();
   app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "tactile_record: %s (try --help)\n", e.what());
-    return 2;
-  }
-  if (opt.endpoints.empty() && opt.curve.empty()) {
-    std::fprintf(stderr,
-                 "tactile_record: give at least one endpoint to subscribe to (try --help)\n");
-    return 2;
-  }
-  try {
+  return tactile::cli::run(app, argc, argv, [&] {
+    if (opt.endpoints.empty() && opt.curve.empty())
+      throw tactile::cli::UsageError("give at least one endpoint to subscribe to");
     return run(std::move(opt));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactile_record: %s\n", e.what());
-    return 1;
-  }
+  });
 }

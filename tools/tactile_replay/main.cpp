@@ -10,6 +10,7 @@
 
 #include "player.hpp"
 #include "remeasure.hpp"
+#include "tactile/cli/run.hpp"
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/recording/log_reader.hpp"
 #include "tactile/util/clock.hpp"
@@ -319,36 +320,21 @@ int main(int argc, char** argv) {
   app.add_flag("--info", opt.info,
                "describe the log: header, topics, counts, time span, integrity");
   app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "tactile_replay: %s (try --help)\n", e.what());
-    return 2;
-  }
-  // "--remeasure A.yaml B.yaml LOG": the option takes every file; the log is the one that is
-  // not a calibration.
-  if (opt.log.empty() && opt.remeasure.size() >= 2 && !opt.remeasure.back().ends_with(".yaml") &&
-      !opt.remeasure.back().ends_with(".yml")) {
-    opt.log = opt.remeasure.back();
-    opt.remeasure.pop_back();
-  }
-  if (opt.log.empty()) {
-    std::fprintf(stderr, "tactile_replay: give the log file (try --help)\n");
-    return 2;
-  }
-  if (opt.info + !opt.remeasure.empty() > 1) {
-    std::fprintf(stderr, "tactile_replay: --info and --remeasure exclude each other\n");
-    return 2;
-  }
-  try {
+  return tactile::cli::run(app, argc, argv, [&] {
+    // "--remeasure A.yaml B.yaml LOG": the option takes every file; the log is the one that is
+    // not a calibration.
+    if (opt.log.empty() && opt.remeasure.size() >= 2 && !opt.remeasure.back().ends_with(".yaml") &&
+        !opt.remeasure.back().ends_with(".yml")) {
+      opt.log = opt.remeasure.back();
+      opt.remeasure.pop_back();
+    }
+    if (opt.log.empty()) throw tactile::cli::UsageError("give the log file");
+    if (opt.info && !opt.remeasure.empty())
+      throw tactile::cli::UsageError("--info and --remeasure exclude each other");
     tactile::util::set_log_level(tactile::util::parse_log_level(opt.log_level));
     tactile::util::install_stop_handlers();
     if (opt.info) return info(opt);
     if (!opt.remeasure.empty()) return remeasure(opt);
     return play(opt);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactile_replay: %s\n", e.what());
-    return 1;
-  }
+  });
 }

@@ -36,6 +36,11 @@ void set_program_name(std::string_view name) {
   g_program = std::string(name);
 }
 
+std::string program_name() {
+  std::lock_guard lock(g_mutex);
+  return g_program;
+}
+
 void set_log_level(LogLevel level) {
   g_level = level;
 }

@@ -4,6 +4,7 @@
 // the program name and a level. Never used in per-frame paths of the cores.
 #include <fmt/core.h>
 
+#include <string>
 #include <string_view>
 
 namespace tactile::util {
@@ -11,6 +12,9 @@ namespace tactile::util {
 enum class LogLevel { kDebug = 0, kInfo = 1, kWarn = 2, kError = 3 };
 
 void set_program_name(std::string_view name);
+// The name given to set_program_name ("tactile" before any): what log lines and error messages
+// start with.
+std::string program_name();
 void set_log_level(LogLevel level);
 LogLevel log_level();
 // Parses "debug", "info", "warn", "error"; throws std::invalid_argument otherwise.

@@ -1,0 +1,75 @@
+#pragma once
+
+// The exit status of every program, in one place (docs/architecture.md#rule-7,
+// docs/tools.md#exit-status): `--help` prints the usage on standard output and exits 0; a usage
+// error (what CLI11 refuses, or a cli::UsageError the program throws after parsing) exits 2 with
+// "PROGRAM: message (try --help)" on standard error; any other exception exits 1 with
+// "PROGRAM: message". PROGRAM is util::program_name(): a main calls util::set_program_name first.
+//
+//   int main(int argc, char** argv) {
+//     tactile::util::set_program_name("tactile_plot");
+//     Options opt;
+//     CLI::App app{"..."};
+//     app.add_option(...);
+//     return tactile::cli::run(app, argc, argv, [&] { return run(opt); });
+//   }
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+
+#include "tactile/util/log.hpp"
+#include "tactile/util/text.hpp"
+
+namespace tactile::cli {
+
+inline constexpr int kFailure = 1;     // a bad file or configuration, or any other failure
+inline constexpr int kUsageError = 2;  // an unknown option, a missing value or argument
+
+// A usage error found after parsing (options that exclude each other, a missing endpoint): the
+// body throws it and run() reports it as it reports CLI11's own, exit status 2.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Prints "PROGRAM: message (try --help)" on standard error and returns kUsageError.
+inline int report_usage_error(std::string_view message) {
+  std::fprintf(stderr, "%s: %s (try --help)\n", util::program_name().c_str(),
+               util::one_line(message).c_str());
+  return kUsageError;
+}
+
+// Prints "PROGRAM: message" on standard error and returns kFailure.
+inline int report_failure(std::string_view message) {
+  std::fprintf(stderr, "%s: %s\n", util::program_name().c_str(), util::one_line(message).c_str());
+  return kFailure;
+}
+
+// Parses the command line into `app`'s options, then runs `body` (no arguments, returns the exit
+// status, passed through). --help (and anything else CLI11 ends with status 0) prints through
+// app.exit() and returns 0 without running the body.
+template <typename Body>
+int run(CLI::App& app, int argc, char** argv, Body&& body) {
+  static_assert(std::is_convertible_v<std::invoke_result_t<Body&>, int>,
+                "the body returns the exit status");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    return report_usage_error(e.what());
+  }
+  try {
+    return body();
+  } catch (const UsageError& e) {
+    return report_usage_error(e.what());
+  } catch (const std::exception& e) {
+    return report_failure(e.what());
+  }
+}
+
+}  // namespace tactile::cli
