@@ -30,7 +30,7 @@ int run(int argc, char** argv) {
   app.add_option("--arm", arm,
                  "arm controller endpoint (default tcp://127.0.0.1:5556 or the file's)");
   app.add_option("--events", events, "publish events on this endpoint (e.g. tcp://*:5558)");
-  app.add_option("--log-level", log_level, "debug, info, warn or error")->capture_default_str();
+  tactile::cli::add_log_level(app, log_level);
   return tactile::cli::run(app, argc, argv, [&] {
     tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
     std::vector<std::string> warnings;

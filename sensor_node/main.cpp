@@ -53,7 +53,7 @@ int run(int argc, char** argv) {
   app.add_option("--ready-file", ready_path,
                  "write this file once every camera's frames are measured and published, and "
                  "remove it on exit (a health check, docker/compose.yaml)");
-  app.add_option("--log-level", log_level, "debug, info, warn or error")->capture_default_str();
+  tactile::cli::add_log_level(app, log_level);
   return tactile::cli::run(app, argc, argv, [&] {
     tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
     std::vector<std::string> warnings;

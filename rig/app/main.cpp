@@ -58,7 +58,7 @@ int run(int argc, char** argv) {
                  "write the simulated sensors' calibration files (left.yaml, right.yaml) here");
   app.add_option("--dt", dt_s, "physics step (s), overriding the scenario's")
       ->check(CLI::Range(1e-7, 1e-3));
-  app.add_option("--log-level", log_level, "debug, info, warn or error");
+  tactile::cli::add_log_level(app, log_level);
   tactile::rig::RealtimeOptions rt;
   std::string cameras;
   std::string write_configs;

@@ -211,7 +211,7 @@ int main(int argc, char** argv) {
   app.add_flag("--plain", opt.plain, "line mode even on a terminal");
   app.add_flag("--screen", opt.screen, "screen mode even when standard output is not a terminal");
   app.add_flag("--no-color", opt.no_color, "no colours (also when NO_COLOR is set)");
-  app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
+  tactile::cli::add_log_level(app, opt.log_level);
   return tactile::cli::run(app, argc, argv, [&] {
     if (opt.endpoints.empty() && opt.curve.empty())
       throw tactile::cli::UsageError("give at least one endpoint to subscribe to");

@@ -95,6 +95,6 @@ int main(int argc, char** argv) {
   app.add_option("--progress", opt.progress_s, "log progress every this many seconds (0: never)")
       ->capture_default_str();
   app.add_flag("--overwrite", opt.overwrite, "replace an existing output file");
-  app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
+  tactile::cli::add_log_level(app, opt.log_level);
   return tactile::cli::run(app, argc, argv, [&] { return run(opt); });
 }

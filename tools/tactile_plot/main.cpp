@@ -171,6 +171,6 @@ int main(int argc, char** argv) {
   app.add_option("--dr", opt.dr, "dr [mm] for the SLIP flag")->capture_default_str();
   app.add_option("--width", opt.width, "picture width in pixels")->capture_default_str();
   app.add_option("--height", opt.height, "picture height in pixels")->capture_default_str();
-  app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
+  tactile::cli::add_log_level(app, opt.log_level);
   return tactile::cli::run(app, argc, argv, [&] { return run(opt); });
 }

@@ -283,7 +283,7 @@ int main(int argc, char** argv) {
                  "exit 1, naming the endpoint, when an endpoint has sent nothing within this many "
                  "seconds of the start (the log is still closed properly; 0: wait forever)")
       ->capture_default_str();
-  app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
+  tactile::cli::add_log_level(app, opt.log_level);
   return tactile::cli::run(app, argc, argv, [&] {
     if (opt.endpoints.empty() && opt.curve.empty())
       throw tactile::cli::UsageError("give at least one endpoint to subscribe to");

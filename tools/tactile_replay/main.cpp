@@ -319,7 +319,7 @@ int main(int argc, char** argv) {
       "with --remeasure: measure with this centroid estimator instead of the recorded one");
   app.add_flag("--info", opt.info,
                "describe the log: header, topics, counts, time span, integrity");
-  app.add_option("--log-level", opt.log_level, "debug, info, warn or error")->capture_default_str();
+  tactile::cli::add_log_level(app, opt.log_level);
   return tactile::cli::run(app, argc, argv, [&] {
     // "--remeasure A.yaml B.yaml LOG": the option takes every file; the log is the one that is
     // not a calibration.

@@ -159,6 +159,22 @@ std::string test_name(const ::testing::TestParamInfo<Program>& info) {
 
 INSTANTIATE_TEST_SUITE_P(Cli, EveryProgram, ::testing::ValuesIn(programs()), test_name);
 
+TEST_P(EveryProgram, ABadLogLevelIsAUsageError) {
+  // Every program whose help offers --log-level refuses a level it does not know while parsing
+  // (tactile::cli::add_log_level): exit 2, as for any other bad value; the others refuse the
+  // option itself, exit 2 too.
+  const Program& p = GetParam();
+  const ProcessResult help = run_with(p, {"--help"});
+  const ProcessResult r = run_with(p, {"--log-level", "loud"});
+  ASSERT_FALSE(r.timed_out);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  if (help.out.find("--log-level") != std::string::npos) {
+    EXPECT_NE(r.err.find("log level must be debug, info, warn or error, is 'loud'"),
+              std::string::npos)
+        << r.err;
+  }
+}
+
 TEST(CliList, HoldsTheProgramsTheScriptsAndThePythonReader) {
   std::vector<std::string> names;
   for (const Program& p : programs())

@@ -50,6 +50,23 @@ inline int report_failure(std::string_view message) {
   return kFailure;
 }
 
+// The --log-level option every program has: debug, info, warn or error (util::parse_log_level);
+// another value is a usage error (exit status 2) when the command line is parsed.
+inline CLI::Option* add_log_level(CLI::App& app, std::string& level) {
+  return app.add_option("--log-level", level, "debug, info, warn or error")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            try {
+              util::parse_log_level(text);
+              return {};
+            } catch (const std::invalid_argument& e) {
+              return e.what();
+            }
+          },
+          "LEVEL", "log level"))
+      ->capture_default_str();
+}
+
 // Parses the command line into `app`'s options, then runs `body` (no arguments, returns the exit
 // status, passed through). --help (and anything else CLI11 ends with status 0) prints through
 // app.exit() and returns 0 without running the body.
