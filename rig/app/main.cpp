@@ -16,6 +16,7 @@
 #include "tactile/rig/realtime.hpp"
 #include "tactile/rig/scenario.hpp"
 #include "tactile/rig/sensors.hpp"
+#include "tactile/rig/sweep.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
@@ -36,7 +37,12 @@ int run(int argc, char** argv) {
       "for sensor_node and hand_node; the report scores what they measured and decided.\n"
       "  rig --scenario FILE --write-configs DIR\n"
       "writes the sensors' calibrations and the configurations of sensor_node and hand_node for "
-      "it."};
+      "it.\n"
+      "  rig --sweep N --seed S --out DIR [--jobs J] [--shard K/N]\n"
+      "draws N random scenarios, runs each in lockstep in a child rig process and writes\n"
+      "DIR/sweep.csv, summary.md and sweep.png (docs/slip.md).\n"
+      "  rig --sweep-merge DIR... --out DIR\n"
+      "combines the shards of one sweep into one table and plot."};
   std::string scenario_path;
   std::string report_path;
   std::string plots_dir;
@@ -46,7 +52,8 @@ int run(int argc, char** argv) {
   bool lockstep = false;
   double dt_s = 0;
   std::string log_level = "info";
-  app.add_option("--scenario", scenario_path, "scenario file (tactile-scenario/1)")->required();
+  app.add_option("--scenario", scenario_path,
+                 "scenario file (tactile-scenario/1); required except for --sweep, --sweep-merge");
   app.add_option("--report", report_path, "write the scenario report (JSON) here");
   app.add_flag("--lockstep", lockstep, "simulated time in one process, deterministic");
   app.add_option("--plots", plots_dir, "write the run's plots (PNG) into this directory");
@@ -104,12 +111,62 @@ int run(int argc, char** argv) {
   app.add_option("--write-configs", write_configs,
                  "write left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml for this "
                  "scenario into DIR and exit");
+  tactile::rig::sweep::SweepOptions sweep;
+  std::string shard;
+  std::vector<std::string> merge_dirs;
+  auto* sweep_opt =
+      app.add_option("--sweep", sweep.scenarios,
+                     "draw this many random scenarios and run each in lockstep (docs/slip.md)")
+          ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{10000000}));
+  auto* merge_opt = app.add_option("--sweep-merge", merge_dirs,
+                                   "combine these sweep directories (shards of one sweep)")
+                        ->allow_extra_args(true)
+                        ->excludes(sweep_opt);
+  app.add_option("--seed", sweep.seed, "sweep: the draw's seed")->capture_default_str();
+  app.add_option("--out", sweep.out, "sweep, sweep-merge: the output directory");
+  app.add_option("--jobs", sweep.jobs, "sweep: child processes at a time (default: the cores)")
+      ->check(CLI::Range(1, 1024));
+  app.add_option("--shard", shard, "sweep: run only part K of N of the draw, as K/N");
+  app.add_option("--max-sim-time", sweep.max_sim_time_s,
+                 "sweep: cut each scenario at this much simulated time (s; short test sweeps)")
+      ->check(CLI::Range(0.1, 3600.0));
   return tactile::cli::run(app, argc, argv, [&] {
     try {
       tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
     } catch (const std::invalid_argument& e) {
       throw tactile::cli::UsageError(std::string("--log-level: ") + e.what());
     }
+    if (*sweep_opt || *merge_opt) {
+      if (sweep.out.empty())
+        throw tactile::cli::UsageError("--sweep and --sweep-merge need --out DIR");
+      if (!scenario_path.empty() || lockstep)
+        throw tactile::cli::UsageError(
+            "--sweep and --sweep-merge take no --scenario or --lockstep");
+      if (*merge_opt) {
+        tactile::rig::sweep::merge_sweeps({merge_dirs.begin(), merge_dirs.end()}, sweep.out);
+        return 0;
+      }
+      if (!shard.empty()) {
+        const auto slash = shard.find('/');
+        try {
+          std::size_t used = 0;
+          sweep.shard = std::stoi(shard.substr(0, slash), &used);
+          if (slash == std::string::npos || used != slash) throw std::invalid_argument(shard);
+          sweep.shards = std::stoi(shard.substr(slash + 1), &used);
+          if (used != shard.size() - slash - 1) throw std::invalid_argument(shard);
+        } catch (const std::exception&) {
+          throw tactile::cli::UsageError("--shard must be K/N, for example 2/3; got '" + shard +
+                                         "'");
+        }
+        if (sweep.shards < 1 || sweep.shard < 1 || sweep.shard > sweep.shards) {
+          throw tactile::cli::UsageError("--shard K/N needs 1 <= K <= N; got '" + shard + "'");
+        }
+      }
+      tactile::util::install_stop_handlers();
+      tactile::rig::sweep::run_sweep(sweep);
+      return 0;
+    }
+    if (scenario_path.empty()) throw tactile::cli::UsageError("--scenario is required");
     const tactile::rig::Scenario scenario = tactile::rig::load_scenario(scenario_path);
     if (!cameras.empty()) {
       const auto comma = cameras.find(',');

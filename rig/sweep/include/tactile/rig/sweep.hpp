@@ -1,0 +1,135 @@
+#pragma once
+
+// The random scenario sweep (docs/slip.md, "The sweep"): N scenarios drawn from documented ranges,
+// each run in lockstep by a child `rig` process, scored from its report.json into one CSV row per
+// scenario and decision method, a summary table and a plot. The draw is deterministic per
+// (sweep seed, scenario index), so shards and job counts never change a scenario.
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace tactile::rig::sweep {
+
+// A closed interval a drawn parameter lies in.
+struct Range {
+  double lo = 0;
+  double hi = 0;
+};
+
+// The documented ranges (docs/slip.md): every draw lies within them, ends included.
+struct Ranges {
+  Range mass_kg{0.003, 0.080};
+  Range radius_mm{12.0, 20.0};
+  Range friction{0.4, 1.2};
+  Range kinetic_ratio{0.3, 0.9};
+  Range free_turn_deg{90.0, 540.0};
+  Range vibration_mm{0.0, 0.7};
+  Range vibration_hz{5.0, 20.0};
+  Range noise_sigma{1.0, 5.0};
+  Range fps{60.0, 500.0};
+  // bit_depth: 8 or 16, each with probability 1/2.
+};
+inline constexpr Ranges kRanges{};
+
+// One drawn scenario. Values are rounded to a fixed grid (0.1 g, 0.01 mm, 0.001, 0.1 deg, 1 um,
+// 0.01 Hz, 0.01 levels, whole fps) so that the scenario file states them exactly.
+struct Draw {
+  std::uint64_t index = 0;
+  std::uint64_t scenario_seed = 0;  // the scenario file's `seed` (noise), mixed from (S, index)
+  double mass_kg = 0;
+  double radius_mm = 0;
+  double friction = 0;
+  double kinetic_ratio = 0;
+  double free_turn_deg = 0;
+  double vibration_mm = 0;
+  double vibration_hz = 0;
+  double noise_sigma = 0;
+  int fps = 0;
+  int bit_depth = 0;
+};
+
+// Scenario `index` of the sweep with seed `sweep_seed`: depends on nothing else. Pure.
+Draw draw_scenario(std::uint64_t sweep_seed, std::uint64_t index);
+
+// The drawn scenario as a scenario file (tactile-scenario/1), the controller's defaults (no
+// `controller` section). max_sim_time_s > 0 writes sim.max_time_s (short test sweeps).
+std::string scenario_yaml(const Draw& d, double max_sim_time_s = 0);
+
+// --- the table ---------------------------------------------------------------------------------
+
+// The CSV's columns, in order (docs/slip.md lists their meaning).
+const std::vector<std::string>& columns();
+
+// One row: a cell per column, as written in the CSV ("" for none).
+struct Row {
+  std::vector<std::string> cells;
+  const std::string& at(const std::string& column) const;
+  // The cell as a number; NaN when empty or not a number.
+  double number(const std::string& column) const;
+};
+
+// The rows of one scenario's run, one per decision method the report scores (today one, the
+// paper's rule: method "paper"), from the report's JSON text. Throws std::runtime_error for a
+// report that is not JSON or lacks a key.
+std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json);
+// The row of a scenario whose rig process failed: its exit status (128 + signal when killed) and
+// the last line it wrote on standard error.
+Row failed_row(const Draw& d, int exit_status, const std::string& last_stderr_line);
+
+// The CSV text: a header line, then the rows (sorted by index, then method).
+std::string csv_text(std::vector<Row> rows);
+// Parses csv_text()'s output; throws std::runtime_error naming `source` and the line.
+std::vector<Row> parse_csv(const std::string& text, const std::string& source);
+
+// What a sweep directory holds besides its rows (DIR/sweep.json).
+struct SweepInfo {
+  std::uint64_t seed = 0;
+  std::uint64_t scenarios = 0;  // N drawn, over all shards
+  double max_sim_time_s = 0;    // 0: the scenarios' own limit
+  int shard = 1;                // K of shards
+  int shards = 1;
+  bool stopped = false;  // stopped by a signal before every scenario ran
+};
+std::string info_json(const SweepInfo& info);
+SweepInfo parse_info(const std::string& text, const std::string& source);
+
+// The summary (Markdown): per method, median, 5th and 95th percentile of each score, completion,
+// drops, classifications. Depends on the rows and the seed, N and time limit only.
+std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info);
+// The distributions as a PNG drawn with tactile::plot.
+void write_plot(const std::vector<Row>& rows, const SweepInfo& info,
+                const std::filesystem::path& png);
+
+// --- running -----------------------------------------------------------------------------------
+
+struct SweepOptions {
+  std::uint64_t scenarios = 0;
+  std::uint64_t seed = 1;
+  std::filesystem::path out;
+  int jobs = 0;  // 0: the number of cores
+  int shard = 1;
+  int shards = 1;
+  double max_sim_time_s = 0;
+  // The program run per scenario as PROGRAM --lockstep --scenario FILE --report FILE; empty: this
+  // rig (/proc/self/exe).
+  std::string child_program;
+};
+
+// The scenario indices of shard K of N: i with i % N == K - 1 (interleaved, so the shards get
+// alike shares of every kind of scenario).
+std::vector<std::uint64_t> shard_indices(std::uint64_t scenarios, int shard, int shards);
+
+// Runs the sweep (or its shard) and writes DIR/scenarios/, DIR/reports/, DIR/logs/, sweep.json,
+// sweep.csv, summary.md and sweep.png; prints the summary on standard output and the progress on
+// standard error. A SIGINT or SIGTERM (util::install_stop_handlers) stops the children and writes
+// what is done. Returns the number of rows written.
+std::size_t run_sweep(const SweepOptions& options);
+
+// Combines the sweep directories `dirs` (shards of one sweep: same seed, N and time limit, no
+// scenario twice) into `out`: sweep.csv, summary.md and sweep.png as one run would have written
+// them. Throws std::runtime_error naming the directory for a mismatch.
+std::size_t merge_sweeps(const std::vector<std::filesystem::path>& dirs,
+                         const std::filesystem::path& out);
+
+}  // namespace tactile::rig::sweep

@@ -1,0 +1,68 @@
+// The sweep's draw: pure, no I/O (docs/slip.md, "The sweep").
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "tactile/rig/sweep.hpp"
+#include "tactile/util/random.hpp"
+
+namespace tactile::rig::sweep {
+namespace {
+
+// The splitmix64 finaliser: neighbouring (seed, index) pairs give unrelated generators.
+std::uint64_t mix64(std::uint64_t z) {
+  z += 0x9E3779B97F4A7C15ULL;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+// Uniform in the range, on a grid of `step`, kept within the range's ends.
+double on_grid(util::Random& rng, Range r, double step) {
+  const double lo = std::ceil(r.lo / step - 1e-9);
+  const double hi = std::floor(r.hi / step + 1e-9);
+  const double k = lo + std::floor(rng.uniform() * (hi - lo + 1.0));
+  return std::fmin(k, hi) * step;
+}
+
+}  // namespace
+
+Draw draw_scenario(std::uint64_t sweep_seed, std::uint64_t index) {
+  // Every value comes from this scenario's own generator, in a fixed order: scenario i is the
+  // same whatever else the sweep runs.
+  util::Random rng(mix64(mix64(sweep_seed) ^ index));
+  const Ranges& r = kRanges;
+  Draw d;
+  d.index = index;
+  d.scenario_seed = rng.next() >> 33;  // small enough for a YAML integer
+  d.mass_kg = on_grid(rng, {r.mass_kg.lo * 1e4, r.mass_kg.hi * 1e4}, 1.0) / 1e4;
+  d.radius_mm = on_grid(rng, {r.radius_mm.lo * 100, r.radius_mm.hi * 100}, 1.0) / 100;
+  d.friction = on_grid(rng, {r.friction.lo * 1000, r.friction.hi * 1000}, 1.0) / 1000;
+  d.kinetic_ratio =
+      on_grid(rng, {r.kinetic_ratio.lo * 1000, r.kinetic_ratio.hi * 1000}, 1.0) / 1000;
+  d.free_turn_deg = on_grid(rng, {r.free_turn_deg.lo * 10, r.free_turn_deg.hi * 10}, 1.0) / 10;
+  d.vibration_mm = on_grid(rng, {r.vibration_mm.lo * 1000, r.vibration_mm.hi * 1000}, 1.0) / 1000;
+  d.vibration_hz = on_grid(rng, {r.vibration_hz.lo * 100, r.vibration_hz.hi * 100}, 1.0) / 100;
+  d.noise_sigma = on_grid(rng, {r.noise_sigma.lo * 100, r.noise_sigma.hi * 100}, 1.0) / 100;
+  d.fps = static_cast<int>(on_grid(rng, r.fps, 1.0));
+  d.bit_depth = rng.below(2) == 0 ? 8 : 16;
+  return d;
+}
+
+std::string scenario_yaml(const Draw& d, double max_sim_time_s) {
+  // {} writes the shortest text that reads back as the same double: the file is the draw.
+  std::string y = fmt::format(
+      "# Scenario {} of a random sweep (docs/slip.md): rig --lockstep --scenario THIS_FILE\n"
+      "format: tactile-scenario/1\n"
+      "seed: {}\n"
+      "camera: {{fps: {}, width: 640, height: 480, bit_depth: {}, noise_sigma: {}}}\n"
+      "cap: {{mass_kg: {}, radius_mm: {}, friction: {}, kinetic_ratio: {}}}\n"
+      "bottle: {{free_turn_deg: {}}}\n"
+      "arm: {{vibration_mm: {}, vibration_hz: {}}}\n",
+      d.index, d.scenario_seed, d.fps, d.bit_depth, d.noise_sigma, d.mass_kg, d.radius_mm,
+      d.friction, d.kinetic_ratio, d.free_turn_deg, d.vibration_mm, d.vibration_hz);
+  if (max_sim_time_s > 0) y += fmt::format("sim: {{max_time_s: {}}}\n", max_sim_time_s);
+  return y;
+}
+
+}  // namespace tactile::rig::sweep

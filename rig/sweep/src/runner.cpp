@@ -1,0 +1,240 @@
+// Running a sweep: one child rig process per scenario, J at a time (docs/slip.md, "The sweep").
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <thread>
+
+#include "tactile/rig/sweep.hpp"
+#include "tactile/util/files.hpp"
+#include "tactile/util/log.hpp"
+#include "tactile/util/stop.hpp"
+#include "tactile/util/text.hpp"
+
+extern char** environ;
+
+namespace tactile::rig::sweep {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string duration_text(double s) {
+  const auto whole = static_cast<long long>(s + 0.5);
+  return fmt::format("{}:{:02d}:{:02d}", whole / 3600, static_cast<int>(whole / 60 % 60),
+                     static_cast<int>(whole % 60));
+}
+
+// The last non-empty line of a file ("" when none or unreadable).
+std::string last_line(const fs::path& path) {
+  std::string text;
+  try {
+    text = util::read_file(path);
+  } catch (const std::exception&) {
+    return {};
+  }
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r'))
+    text.pop_back();
+  const auto nl = text.rfind('\n');
+  return util::one_line(nl == std::string::npos ? text : text.substr(nl + 1));
+}
+
+struct Paths {
+  fs::path scenario;
+  fs::path report;
+  fs::path log;
+};
+
+Paths paths_of(const fs::path& out, std::uint64_t index, std::uint64_t scenarios) {
+  const int width = std::max<int>(5, static_cast<int>(fmt::format("{}", scenarios).size()));
+  const std::string name = fmt::format("{:0{}}", index, width);
+  return {out / "scenarios" / (name + ".yaml"), out / "reports" / (name + ".json"),
+          out / "logs" / (name + ".log")};
+}
+
+// Starts PROGRAM --lockstep --scenario FILE --report FILE in its own process group (a Ctrl-C at
+// the terminal reaches the sweep alone, which stops its children), stdout to /dev/null, stderr to
+// the scenario's log.
+pid_t spawn_child(const std::string& program, const Paths& p) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, p.log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawnattr_t attr;
+  posix_spawnattr_init(&attr);
+  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
+  posix_spawnattr_setpgroup(&attr, 0);
+  std::vector<std::string> args{program,    "--lockstep",     "--scenario", p.scenario.string(),
+                                "--report", p.report.string()};
+  std::vector<char*> argv;
+  for (std::string& a : args)
+    argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, program.c_str(), &actions, &attr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attr);
+  if (rc != 0) {
+    throw std::runtime_error(fmt::format("cannot start {}: {}", program, std::strerror(rc)));
+  }
+  return pid;
+}
+
+void write_outputs(const std::vector<Row>& rows, const SweepInfo& info, const fs::path& out) {
+  util::write_file_atomic(out / "sweep.json", info_json(info));
+  util::write_file_atomic(out / "sweep.csv", csv_text(rows));
+  const std::string summary = summary_markdown(rows, info);
+  util::write_file_atomic(out / "summary.md", summary);
+  write_plot(rows, info, out / "sweep.png");
+  std::fputs(summary.c_str(), stdout);
+  std::fflush(stdout);
+  util::log_info("wrote {}, {}, {} and {}", (out / "sweep.csv").string(),
+                 (out / "summary.md").string(), (out / "sweep.png").string(),
+                 (out / "sweep.json").string());
+}
+
+}  // namespace
+
+std::vector<std::uint64_t> shard_indices(std::uint64_t scenarios, int shard, int shards) {
+  if (shards < 1 || shard < 1 || shard > shards) {
+    throw std::invalid_argument(fmt::format("shard {}/{}: K must be within 1..N", shard, shards));
+  }
+  std::vector<std::uint64_t> v;
+  for (std::uint64_t i = static_cast<std::uint64_t>(shard - 1); i < scenarios;
+       i += static_cast<std::uint64_t>(shards))
+    v.push_back(i);
+  return v;
+}
+
+std::size_t run_sweep(const SweepOptions& o) {
+  const std::vector<std::uint64_t> indices = shard_indices(o.scenarios, o.shard, o.shards);
+  const std::string program = o.child_program.empty() ? "/proc/self/exe" : o.child_program;
+  const int jobs =
+      o.jobs > 0 ? o.jobs : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  for (const char* sub : {"scenarios", "reports", "logs"})
+    util::check_writable_dir(o.out / sub);
+
+  // Every scenario file first: each can be re-run alone, also those a stop leaves unrun.
+  std::map<std::uint64_t, Draw> draws;
+  for (const std::uint64_t i : indices) {
+    draws[i] = draw_scenario(o.seed, i);
+    const Paths p = paths_of(o.out, i, o.scenarios);
+    util::write_file_atomic(p.scenario, scenario_yaml(draws[i], o.max_sim_time_s));
+    std::error_code ec;
+    fs::remove(p.report, ec);  // a report left by an earlier sweep is not this run's
+  }
+
+  util::log_info("sweep: {} scenarios (shard {}/{} of {} drawn with seed {}), {} at a time",
+                 indices.size(), o.shard, o.shards, o.scenarios, o.seed, jobs);
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<Row> rows;
+  std::map<pid_t, std::uint64_t> running;
+  std::size_t next = 0;
+  std::size_t done = 0;
+  bool stopped = false;
+  while (next < indices.size() || !running.empty()) {
+    if (util::stop_requested() && !stopped) {
+      stopped = true;
+      util::log_warn("sweep: stopping {} running scenarios", running.size());
+      for (const auto& [pid, index] : running)
+        ::kill(pid, SIGTERM);
+    }
+    while (!stopped && next < indices.size() && static_cast<int>(running.size()) < jobs) {
+      const std::uint64_t i = indices[next++];
+      running[spawn_child(program, paths_of(o.out, i, o.scenarios))] = i;
+    }
+    int status = 0;
+    const pid_t pid = ::waitpid(-1, &status, WNOHANG);
+    if (pid <= 0) {
+      if (pid < 0 && errno == ECHILD) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      continue;
+    }
+    const auto it = running.find(pid);
+    if (it == running.end()) continue;
+    const std::uint64_t i = it->second;
+    running.erase(it);
+    if (stopped) continue;  // cut short by the stop: not a result
+    const Paths p = paths_of(o.out, i, o.scenarios);
+    const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    if (code == 0) {
+      try {
+        for (Row& r : rows_from_report(draws[i], util::read_file(p.report)))
+          rows.push_back(std::move(r));
+      } catch (const std::exception& e) {
+        rows.push_back(
+            failed_row(draws[i], 0, util::one_line(std::string("bad report: ") + e.what())));
+      }
+    } else {
+      rows.push_back(failed_row(draws[i], code, last_line(p.log)));
+      util::log_warn("sweep: scenario {} failed with status {}: {}", i, code, last_line(p.log));
+    }
+    ++done;
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double remaining =
+        elapsed / static_cast<double>(done) * static_cast<double>(indices.size() - done);
+    util::log_info("sweep: {}/{} done, {} elapsed, about {} remaining", done, indices.size(),
+                   duration_text(elapsed), duration_text(remaining));
+  }
+  SweepInfo info{o.seed, o.scenarios, o.max_sim_time_s, o.shard, o.shards, stopped};
+  if (stopped) util::log_warn("sweep: stopped; {} of {} scenarios ran", done, indices.size());
+  write_outputs(rows, info, o.out);
+  return rows.size();
+}
+
+std::size_t merge_sweeps(const std::vector<fs::path>& dirs, const fs::path& out) {
+  if (dirs.empty()) throw std::invalid_argument("nothing to merge");
+  std::vector<Row> rows;
+  std::map<std::string, fs::path> seen;  // "index method" -> directory
+  SweepInfo merged;
+  for (std::size_t d = 0; d < dirs.size(); ++d) {
+    const fs::path info_path = dirs[d] / "sweep.json";
+    const SweepInfo info = parse_info(util::read_file(info_path), info_path.string());
+    if (d == 0) {
+      merged = info;
+    } else if (info.seed != merged.seed || info.scenarios != merged.scenarios ||
+               info.max_sim_time_s != merged.max_sim_time_s) {
+      throw std::runtime_error(fmt::format(
+          "{}: seed {}, {} scenarios, time limit {} s; {} has seed {}, {} scenarios, {} s: not "
+          "shards of one sweep",
+          info_path.string(), info.seed, info.scenarios, info.max_sim_time_s, dirs[0].string(),
+          merged.seed, merged.scenarios, merged.max_sim_time_s));
+    }
+    merged.stopped = merged.stopped || info.stopped;
+    const fs::path csv = dirs[d] / "sweep.csv";
+    for (Row& r : parse_csv(util::read_file(csv), csv.string())) {
+      const std::string key = r.at("index") + " " + r.at("method");
+      const auto [it, fresh] = seen.emplace(key, dirs[d]);
+      if (!fresh) {
+        throw std::runtime_error(fmt::format("{}: scenario {} (method {}) is in {} too",
+                                             csv.string(), r.at("index"), r.at("method"),
+                                             it->second.string()));
+      }
+      rows.push_back(std::move(r));
+    }
+  }
+  merged.shard = 1;
+  merged.shards = 1;
+  std::set<std::string> indices;
+  for (const Row& r : rows)
+    indices.insert(r.at("index"));
+  if (indices.size() < merged.scenarios) {
+    util::log_warn("sweep-merge: {} of {} scenarios present", indices.size(), merged.scenarios);
+  }
+  util::check_writable_dir(out);
+  write_outputs(rows, merged, out);
+  return rows.size();
+}
+
+}  // namespace tactile::rig::sweep

@@ -1,0 +1,333 @@
+// The sweep's table: rows from the runs' reports, the CSV, sweep.json and the summary.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "tactile/rig/lockstep.hpp"
+#include "tactile/rig/sweep.hpp"
+
+namespace tactile::rig::sweep {
+namespace {
+
+using nlohmann::json;
+
+std::size_t column_index(const std::string& name) {
+  const auto& c = columns();
+  const auto it = std::find(c.begin(), c.end(), name);
+  if (it == c.end()) throw std::logic_error("sweep: no column '" + name + "'");
+  return static_cast<std::size_t>(it - c.begin());
+}
+
+Row drawn_row(const Draw& d, const std::string& method) {
+  Row row;
+  row.cells.assign(columns().size(), std::string());
+  const auto set = [&](const char* column, std::string value) {
+    row.cells[column_index(column)] = std::move(value);
+  };
+  set("index", fmt::format("{}", d.index));
+  set("method", method);
+  set("scenario_seed", fmt::format("{}", d.scenario_seed));
+  set("mass_kg", fmt::format("{}", d.mass_kg));
+  set("radius_mm", fmt::format("{}", d.radius_mm));
+  set("friction", fmt::format("{}", d.friction));
+  set("kinetic_ratio", fmt::format("{}", d.kinetic_ratio));
+  set("free_turn_deg", fmt::format("{}", d.free_turn_deg));
+  set("vibration_mm", fmt::format("{}", d.vibration_mm));
+  set("vibration_hz", fmt::format("{}", d.vibration_hz));
+  set("noise_sigma", fmt::format("{}", d.noise_sigma));
+  set("fps", fmt::format("{}", d.fps));
+  set("bit_depth", fmt::format("{}", d.bit_depth));
+  return row;
+}
+
+// A JSON value as a cell: numbers in their shortest exact text, null as empty.
+std::string cell(const json& v) {
+  if (v.is_null()) return {};
+  if (v.is_boolean()) return v.get<bool>() ? "true" : "false";
+  if (v.is_number_integer()) return fmt::format("{}", v.get<std::int64_t>());
+  if (v.is_number()) return fmt::format("{}", v.get<double>());
+  if (v.is_string()) return v.get<std::string>();
+  throw std::runtime_error("unexpected value " + v.dump());
+}
+
+const json& need(const json& j, const char* key) {
+  if (!j.is_object() || !j.contains(key)) throw std::runtime_error(std::string("no key ") + key);
+  return j.at(key);
+}
+
+// RFC 4180: a field with a comma, quote or line break is quoted, its quotes doubled.
+std::string quoted(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string q = "\"";
+  for (const char c : s) {
+    if (c == '"') q += '"';
+    q += c == '\n' || c == '\r' ? ' ' : c;
+  }
+  return q + "\"";
+}
+
+double percentile(const std::vector<double>& v, double q) {
+  return nearest_rank_percentile(v, q);
+}
+
+std::string number_text(double v) {
+  return std::isfinite(v) ? fmt::format("{:.4g}", v) : std::string("-");
+}
+
+}  // namespace
+
+const std::vector<std::string>& columns() {
+  static const std::vector<std::string> c{"index",
+                                          "method",
+                                          "scenario_seed",
+                                          "mass_kg",
+                                          "radius_mm",
+                                          "friction",
+                                          "kinetic_ratio",
+                                          "free_turn_deg",
+                                          "vibration_mm",
+                                          "vibration_hz",
+                                          "noise_sigma",
+                                          "fps",
+                                          "bit_depth",
+                                          "exit_status",
+                                          "completed",
+                                          "end_reason",
+                                          "dropped",
+                                          "over_events",
+                                          "grasp_classified",
+                                          "release_classified",
+                                          "tightened_cycle",
+                                          "true_tight_cycle",
+                                          "tight_cycle_error",
+                                          "tight_time_error_s",
+                                          "precision",
+                                          "recall",
+                                          "ideal_precision",
+                                          "ideal_recall",
+                                          "max_fz_N",
+                                          "false_slips",
+                                          "recompressions",
+                                          "sim_time_s",
+                                          "error"};
+  return c;
+}
+
+const std::string& Row::at(const std::string& column) const {
+  return cells.at(column_index(column));
+}
+
+double Row::number(const std::string& column) const {
+  const std::string& s = at(column);
+  if (s.empty()) return std::numeric_limits<double>::quiet_NaN();
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  return end == s.c_str() + s.size() ? v : std::numeric_limits<double>::quiet_NaN();
+}
+
+std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json) {
+  const json r = json::parse(report_json);
+  Row row = drawn_row(d, "paper");
+  const auto set = [&](const char* column, std::string value) {
+    row.cells[column_index(column)] = std::move(value);
+  };
+  set("exit_status", "0");
+  set("completed", cell(need(r, "completed")));
+  set("end_reason", cell(need(need(r, "lockstep"), "end_reason")));
+  set("dropped", cell(need(r, "dropped")));
+  set("over_events", cell(need(r, "over_events")));
+  set("grasp_classified", cell(need(r, "grasp_classified")));
+  set("release_classified", cell(need(r, "release_classified")));
+  const json& tightened = need(r, "tightened_cycle");
+  const json& true_tight = need(r, "true_tight_cycle");
+  set("tightened_cycle", cell(tightened));
+  set("true_tight_cycle", cell(true_tight));
+  if (tightened.is_number_integer() && true_tight.is_number_integer()) {
+    set("tight_cycle_error",
+        fmt::format("{}", tightened.get<std::int64_t>() - true_tight.get<std::int64_t>()));
+  }
+  // Seconds from the cap meeting its stop to "tight", once the report gives it.
+  if (r.contains("tight_time_error_s")) set("tight_time_error_s", cell(r.at("tight_time_error_s")));
+  const json& slip = need(r, "slip");
+  set("precision", cell(need(slip, "precision")));
+  set("recall", cell(need(slip, "recall")));
+  set("ideal_precision", cell(need(need(slip, "ideal_sensor"), "precision")));
+  set("ideal_recall", cell(need(need(slip, "ideal_sensor"), "recall")));
+  set("max_fz_N", cell(need(r, "max_fz_N")));
+  set("false_slips", cell(need(slip, "false_positives")));
+  set("recompressions", cell(need(r, "recompressions")));
+  set("sim_time_s", cell(need(need(r, "lockstep"), "sim_time_s")));
+  return {row};
+}
+
+Row failed_row(const Draw& d, int exit_status, const std::string& last_stderr_line) {
+  Row row = drawn_row(d, "paper");
+  row.cells[column_index("exit_status")] = fmt::format("{}", exit_status);
+  row.cells[column_index("error")] = last_stderr_line;
+  return row;
+}
+
+std::string csv_text(std::vector<Row> rows) {
+  std::stable_sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) {
+    const double ia = a.number("index");
+    const double ib = b.number("index");
+    return ia != ib ? ia < ib : a.at("method") < b.at("method");
+  });
+  std::string out;
+  for (std::size_t i = 0; i < columns().size(); ++i)
+    out += (i ? "," : "") + columns()[i];
+  out += '\n';
+  for (const Row& row : rows) {
+    for (std::size_t i = 0; i < row.cells.size(); ++i)
+      out += (i ? "," : "") + quoted(row.cells[i]);
+    out += '\n';
+  }
+  return out;
+}
+
+std::vector<Row> parse_csv(const std::string& text, const std::string& source) {
+  std::vector<std::vector<std::string>> records;
+  std::vector<std::string> fields(1);
+  bool in_quotes = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_quotes) {
+      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
+        fields.back() += '"';
+        ++i;
+      } else if (c == '"') {
+        in_quotes = false;
+      } else {
+        fields.back() += c;
+      }
+    } else if (c == '"') {
+      in_quotes = true;
+    } else if (c == ',') {
+      fields.emplace_back();
+    } else if (c == '\n') {
+      records.push_back(std::move(fields));
+      fields.assign(1, std::string());
+    } else if (c != '\r') {
+      fields.back() += c;
+    }
+  }
+  if (fields.size() > 1 || !fields[0].empty()) records.push_back(std::move(fields));
+  if (records.empty() || records[0] != columns()) {
+    throw std::runtime_error(source + ": line 1: not a sweep CSV (the header must be '" +
+                             fmt::format("{}", fmt::join(columns(), ",")) + "')");
+  }
+  std::vector<Row> rows;
+  for (std::size_t r = 1; r < records.size(); ++r) {
+    if (records[r].size() != columns().size()) {
+      throw std::runtime_error(fmt::format("{}: line {}: {} fields, the header has {}", source,
+                                           r + 1, records[r].size(), columns().size()));
+    }
+    Row row{std::move(records[r])};
+    if (!std::isfinite(row.number("index")))
+      throw std::runtime_error(fmt::format("{}: line {}: index is not a number", source, r + 1));
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+std::string info_json(const SweepInfo& info) {
+  const nlohmann::ordered_json j = {
+      {"format", "tactile-sweep/1"}, {"seed", info.seed},
+      {"scenarios", info.scenarios}, {"max_sim_time_s", info.max_sim_time_s},
+      {"shard", info.shard},         {"shards", info.shards},
+      {"stopped", info.stopped}};
+  return j.dump(2) + "\n";
+}
+
+SweepInfo parse_info(const std::string& text, const std::string& source) {
+  try {
+    const json j = json::parse(text);
+    if (need(j, "format") != "tactile-sweep/1")
+      throw std::runtime_error("format is not tactile-sweep/1");
+    SweepInfo info;
+    info.seed = need(j, "seed").get<std::uint64_t>();
+    info.scenarios = need(j, "scenarios").get<std::uint64_t>();
+    info.max_sim_time_s = need(j, "max_sim_time_s").get<double>();
+    info.shard = need(j, "shard").get<int>();
+    info.shards = need(j, "shards").get<int>();
+    info.stopped = need(j, "stopped").get<bool>();
+    return info;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(source + ": " + e.what());
+  }
+}
+
+std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info) {
+  std::string out = fmt::format("# Sweep: seed {}, {} scenarios drawn", info.seed, info.scenarios);
+  if (info.max_sim_time_s > 0)
+    out += fmt::format(", runs cut at {} s simulated", info.max_sim_time_s);
+  out += "\n";
+  if (info.stopped) out += "\nStopped by a signal before every scenario ran.\n";
+  std::vector<std::string> methods;
+  for (const Row& r : rows) {
+    if (std::find(methods.begin(), methods.end(), r.at("method")) == methods.end())
+      methods.push_back(r.at("method"));
+  }
+  std::sort(methods.begin(), methods.end());
+  for (const std::string& method : methods) {
+    std::vector<const Row*> mine;
+    for (const Row& r : rows) {
+      if (r.at("method") == method) mine.push_back(&r);
+    }
+    const auto count = [&](auto pred) {
+      return static_cast<std::size_t>(std::count_if(mine.begin(), mine.end(), pred));
+    };
+    const std::size_t n = mine.size();
+    const std::size_t ran = count([](const Row* r) { return r->at("exit_status") == "0"; });
+    const auto share = [&](std::size_t k) {
+      return fmt::format("{} of {} ({:.1f} %)", k, n,
+                         n ? 100.0 * static_cast<double>(k) / static_cast<double>(n) : 0.0);
+    };
+    out += fmt::format("\n## Method `{}`: {} scenarios\n\n", method, n);
+    out += "| score | n | median | 5th pct | 95th pct |\n|---|---|---|---|---|\n";
+    for (const char* score :
+         {"precision", "recall", "ideal_precision", "ideal_recall", "tight_cycle_error",
+          "tight_time_error_s", "max_fz_N", "false_slips", "recompressions", "over_events"}) {
+      std::vector<double> v;
+      for (const Row* r : mine) {
+        const double x = r->number(score);
+        if (std::isfinite(x)) v.push_back(x);
+      }
+      if (v.empty()) {
+        out += fmt::format("| {} | 0 | - | - | - |\n", score);
+        continue;
+      }
+      out += fmt::format("| {} | {} | {} | {} | {} |\n", score, v.size(),
+                         number_text(percentile(v, 0.5)), number_text(percentile(v, 0.05)),
+                         number_text(percentile(v, 0.95)));
+    }
+    out += "\n| outcome | scenarios |\n|---|---|\n";
+    out += fmt::format("| rig failed (a row with its exit status) | {} |\n", share(n - ran));
+    out += fmt::format("| completed | {} |\n",
+                       share(count([](const Row* r) { return r->at("completed") == "true"; })));
+    out += fmt::format(
+        "| aborted | {} |\n",
+        share(count([](const Row* r) { return r->at("end_reason").rfind("aborted", 0) == 0; })));
+    out += fmt::format("| dropped | {} |\n",
+                       share(count([](const Row* r) { return r->at("dropped") == "true"; })));
+    out += fmt::format("| OVER raised | {} |\n",
+                       share(count([](const Row* r) { return r->number("over_events") > 0; })));
+    out += fmt::format(
+        "| grasp classified on the lift | {} |\n",
+        share(count([](const Row* r) { return r->at("grasp_classified") == "grasp"; })));
+    out += fmt::format(
+        "| release classified at the bottle | {} |\n",
+        share(count([](const Row* r) { return r->at("release_classified") == "release"; })));
+    out +=
+        fmt::format("| tight in the true cycle | {} |\n",
+                    share(count([](const Row* r) { return r->number("tight_cycle_error") == 0; })));
+  }
+  return out;
+}
+
+}  // namespace tactile::rig::sweep
