@@ -356,6 +356,12 @@ class Canvas {
       while (t < len) {
         const double on = phase < 8 ? 8 - phase : 0;
         const double off = phase < 8 ? 5 : 13 - phase;
+        // A phase a rounding error short of a dash's end (many short segments add it up) would
+        // advance t by nothing, for ever: start the next part of the pattern instead.
+        if (t + (on > 0 ? on : off) <= t) {
+          phase = on > 0 ? 8 : 0;
+          continue;
+        }
         if (on > 0) {
           const double e = std::min(len, t + on);
           segment({a.x + (b.x - a.x) * t / len, a.y + (b.y - a.y) * t / len},
