@@ -151,7 +151,13 @@ std::size_t run_sweep(const SweepOptions& o) {
     }
     while (!stopped && next < indices.size() && static_cast<int>(running.size()) < jobs) {
       const std::uint64_t i = indices[next++];
-      running[spawn_child(program, paths_of(o.out, i, o.scenarios))] = i;
+      try {
+        running[spawn_child(program, paths_of(o.out, i, o.scenarios))] = i;
+      } catch (const std::exception& e) {
+        rows.push_back(failed_row(draws[i], 127, e.what()));  // 127: the shell's "cannot run"
+        util::log_warn("sweep: scenario {}: {}", i, e.what());
+        ++done;
+      }
     }
     int status = 0;
     const pid_t pid = ::waitpid(-1, &status, WNOHANG);

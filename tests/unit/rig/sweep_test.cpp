@@ -233,6 +233,19 @@ TEST(Sweep, AFailingRigProcessIsARowWithItsStatusAndLastLine) {
       std::string::npos);
 }
 
+TEST(Sweep, AProgramThatCannotStartIsARowPerScenario) {
+  TempDir dir;
+  sweep::SweepOptions o;
+  o.scenarios = 2;
+  o.out = dir / "out";
+  o.child_program = (dir / "no-such-rig").string();
+  EXPECT_EQ(sweep::run_sweep(o), 2U);
+  for (const sweep::Row& row : sweep::parse_csv(read(dir / "out" / "sweep.csv"), "sweep.csv")) {
+    EXPECT_EQ(row.at("exit_status"), "127");
+    EXPECT_NE(row.at("error").find("no-such-rig"), std::string::npos) << row.at("error");
+  }
+}
+
 TEST(Sweep, SigintStopsTheChildrenAndWritesWhatIsDone) {
   TempDir dir;
   tactile::testing::Process p({kRig, "--sweep", "6", "--seed", "11", "--max-sim-time", "6",
