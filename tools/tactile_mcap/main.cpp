@@ -7,7 +7,7 @@
 
 #include "tactile/cli/run.hpp"
 #include "tactile/mcap/export.hpp"
-#include "tactile/util/clock.hpp"
+#include "tactile/recording/read_progress.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
@@ -36,20 +36,10 @@ int run(const Options& opt) {
   tactile::recording::LogReader in(opt.in);
   tactile::util::install_stop_handlers();
   tactile::util::AtomicFileWriter out(opt.out);
-  const auto step = static_cast<std::int64_t>(opt.progress_s * 1e9);
-  std::int64_t next = tactile::util::monotonic_ns() + step;
-  eo.progress = [&](const tactile::recording::LogReader& r, std::uint64_t records) {
+  tactile::recording::ReadProgress progress(in, static_cast<std::int64_t>(opt.progress_s * 1e9));
+  eo.progress = [&](const tactile::recording::LogReader&, std::uint64_t records) {
     if (tactile::util::stop_requested()) return false;
-    if (opt.progress_s > 0) {
-      const std::int64_t now = tactile::util::monotonic_ns();
-      if (now >= next) {
-        next = now + step;
-        tactile::util::log_info("{:.0f} % of {} read ({} records)",
-                                100.0 * static_cast<double>(r.position()) /
-                                    static_cast<double>(std::max<std::uint64_t>(r.file_size(), 1)),
-                                opt.in, records);
-      }
-    }
+    progress.tick(records);
     return true;
   };
   const auto result = tactile::mcap::export_log(

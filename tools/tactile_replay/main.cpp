@@ -13,6 +13,7 @@
 #include "tactile/cli/run.hpp"
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/recording/log_reader.hpp"
+#include "tactile/recording/read_progress.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
@@ -62,26 +63,6 @@ int report_end(ReadStatus s, const LogReader& r) {
   return 0;
 }
 
-class Progress {
- public:
-  explicit Progress(const LogReader& r)
-      : reader_(r), next_(tactile::util::monotonic_ns() + kStep) {}
-  void tick(std::uint64_t records) {
-    const std::int64_t now = tactile::util::monotonic_ns();
-    if (now < next_) return;
-    next_ = now + kStep;
-    const double total = static_cast<double>(std::max<std::uint64_t>(reader_.file_size(), 1));
-    tactile::util::log_info("{:.0f} % of {} read ({} records)",
-                            100.0 * static_cast<double>(reader_.position()) / total,
-                            reader_.path().string(), records);
-  }
-
- private:
-  static constexpr std::int64_t kStep = 2'000'000'000;
-  const LogReader& reader_;
-  std::int64_t next_;
-};
-
 int info(const Options& opt) {
   LogReader r(opt.log);
   const auto& h = r.header();
@@ -100,7 +81,7 @@ int info(const Options& opt) {
   std::int64_t last = 0;
   std::uint64_t n = 0;
   tactile::v1::LogRecord rec;
-  Progress progress(r);
+  tactile::recording::ReadProgress progress(r);
   ReadStatus s;
   while ((s = r.next(rec)) == ReadStatus::kRecord) {
     if (tactile::util::stop_requested()) return 0;
@@ -141,7 +122,7 @@ int remeasure(const Options& opt) {
   tactile::replay::Remeasurer rm(std::move(cals), ro);
   LogReader r(opt.log);
   tactile::v1::LogRecord rec;
-  Progress progress(r);
+  tactile::recording::ReadProgress progress(r);
   ReadStatus s;
   std::uint64_t n = 0;
   while ((s = r.next(rec)) == ReadStatus::kRecord) {
