@@ -1,17 +1,10 @@
 #include "tactile/rig/sensors.hpp"
 
 #include "tactile/config/calibration_file.hpp"
+#include "tactile/util/random.hpp"
 
 namespace tactile::rig {
 namespace {
-
-// splitmix64: independent seeds for the noise pools and frame offsets from the scenario seed.
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
 
 double visible_fz_n(const Calibration& cal) {
   return cal.normal_curve(cal.contact_on);
@@ -41,10 +34,12 @@ std::vector<std::filesystem::path> save_calibrations(
 SimulatedSensors::SimulatedSensors(const Scenario& sc, const CameraParams& camera,
                                    std::span<const Vec3> normals)
     : calibrations_(simulated_calibrations(sc, camera, normals)),
-      frame_rng_{util::Random(mix(sc.seed * 4 + 1)), util::Random(mix(sc.seed * 4 + 2))},
+      frame_rng_{util::Random(util::splitmix64(sc.seed * 4 + 1)),
+                 util::Random(util::splitmix64(sc.seed * 4 + 2))},
       truth_(visible_fz_n(calibrations_[0]), sc.partial_slip_ratio) {
   for (std::size_t i = 0; i < kFingertips; ++i)
-    renderers_.emplace_back(calibrations_[i], camera, sc.optics, mix(sc.seed * 4 + 3 + i * 7919));
+    renderers_.emplace_back(calibrations_[i], camera, sc.optics,
+                            util::splitmix64(sc.seed * 4 + 3 + i * 7919));
 }
 
 const Image& SimulatedSensors::render(std::size_t i, const FingertipTruth& truth) {

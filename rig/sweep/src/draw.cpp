@@ -9,14 +9,6 @@
 namespace tactile::rig::sweep {
 namespace {
 
-// The splitmix64 finaliser: neighbouring (seed, index) pairs give unrelated generators.
-std::uint64_t mix64(std::uint64_t z) {
-  z += 0x9E3779B97F4A7C15ULL;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
-
 // Uniform in the range, on a grid of `step`, kept within the range's ends.
 double on_grid(util::Random& rng, Range r, double step) {
   const double lo = std::ceil(r.lo / step - 1e-9);
@@ -30,7 +22,8 @@ double on_grid(util::Random& rng, Range r, double step) {
 Draw draw_scenario(std::uint64_t sweep_seed, std::uint64_t index) {
   // Every value comes from this scenario's own generator, in a fixed order: scenario i is the
   // same whatever else the sweep runs.
-  util::Random rng(mix64(mix64(sweep_seed) ^ index));
+  // splitmix64 twice: neighbouring (seed, index) pairs give unrelated generators.
+  util::Random rng(util::splitmix64(util::splitmix64(sweep_seed) ^ index));
   const Ranges& r = kRanges;
   Draw d;
   d.index = index;

@@ -6,6 +6,15 @@
 
 namespace tactile::util {
 
+// splitmix64 (Steele, Lea, Flood 2014): one step from `x`. Neighbouring inputs give unrelated
+// outputs: seeds for independent generators from one seed and an index.
+inline std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+
 // A small, fast, seedable generator (xoshiro256**, seeded through splitmix64) with its own
 // uniform and normal draws, so a seed gives the same numbers with every standard library.
 class Random {
@@ -14,11 +23,8 @@ class Random {
 
   void reseed(std::uint64_t seed) {
     for (auto& s : s_) {
+      s = splitmix64(seed);
       seed += 0x9E3779B97F4A7C15ULL;
-      std::uint64_t z = seed;
-      z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-      z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-      s = z ^ (z >> 31);
     }
     has_spare_ = false;
   }
