@@ -26,6 +26,13 @@ const DoubleField kDoubles[] = {
     {"dr_mm", &Config::dr_mm},
     {"twist_dr_factor", &Config::twist_dr_factor},
     {"direction_deadband_mm", &Config::direction_deadband_mm},
+    {"field_partial_slip_ratio", &Config::field_partial_slip_ratio},
+    {"field_edge_ratio", &Config::field_edge_ratio},
+    {"field_drop_ratio", &Config::field_drop_ratio},
+    {"field_mu_initial", &Config::field_mu_initial},
+    {"field_min_fz_n", &Config::field_min_fz_n},
+    {"field_arm_speed_mps", &Config::field_arm_speed_mps},
+    {"field_arm_yaw_rate_rps", &Config::field_arm_yaw_rate_rps},
     {"approach_speed_mps", &Config::approach_speed_mps},
     {"recompress_gain_mps", &Config::recompress_gain_mps},
     {"recompress_duration_s", &Config::recompress_duration_s},
@@ -69,7 +76,7 @@ const CountField kCounts[] = {
 }  // namespace
 
 std::vector<std::string> controller_config_keys() {
-  std::vector<std::string> keys{"task"};
+  std::vector<std::string> keys{"task", "slip_detector"};
   for (const auto& f : kDoubles)
     keys.emplace_back(f.name);
   keys.emplace_back("twist_angle_deg");
@@ -119,6 +126,11 @@ control::Config parse_controller_config(const Node& section) {
     }
     if (!known)
       t->fail("must be grasp_move_twist, grasp_move_release or twist_only, is " + t->text());
+  }
+  if (auto n = section.find("slip_detector")) {
+    const auto kind = control::slip_detector_from_string(n->as_string());
+    if (!kind) n->fail("must be paper or field, is " + n->text());
+    cfg.slip_detector = *kind;
   }
   for (const auto& f : kDoubles) {
     if (auto n = section.find(f.name)) cfg.*(f.member) = n->as_double();

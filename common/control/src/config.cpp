@@ -20,6 +20,23 @@ const char* to_string(Task t) {
   return "?";
 }
 
+const char* to_string(SlipDetectorKind k) {
+  switch (k) {
+    case SlipDetectorKind::kPaper:
+      return "paper";
+    case SlipDetectorKind::kField:
+      return "field";
+  }
+  return "?";
+}
+
+std::optional<SlipDetectorKind> slip_detector_from_string(std::string_view name) {
+  for (auto k : {SlipDetectorKind::kPaper, SlipDetectorKind::kField}) {
+    if (name == to_string(k)) return k;
+  }
+  return std::nullopt;
+}
+
 namespace {
 
 template <typename T>
@@ -75,6 +92,22 @@ void Config::validate() const {
     fail("gravity_axis.z", gravity_axis.z, "the axis must not lie along z_f");
   }
   non_negative("direction_deadband_mm", direction_deadband_mm);
+  switch (slip_detector) {
+    case SlipDetectorKind::kPaper:
+    case SlipDetectorKind::kField:
+      break;
+    default:
+      fail("slip_detector", static_cast<int>(slip_detector), "unknown detector");
+  }
+  non_negative("field_partial_slip_ratio", field_partial_slip_ratio);
+  at_most("field_partial_slip_ratio", field_partial_slip_ratio, "1", 1.0);
+  positive("field_edge_ratio", field_edge_ratio);
+  at_most("field_edge_ratio", field_edge_ratio, "1", 1.0);
+  positive("field_drop_ratio", field_drop_ratio);
+  positive("field_mu_initial", field_mu_initial);
+  non_negative("field_min_fz_n", field_min_fz_n);
+  non_negative("field_arm_speed_mps", field_arm_speed_mps);
+  non_negative("field_arm_yaw_rate_rps", field_arm_yaw_rate_rps);
 
   positive("max_finger_speed_mps", max_finger_speed_mps);
   positive("approach_speed_mps", approach_speed_mps);

@@ -48,7 +48,7 @@ const Config& validated(const Config& cfg) {
 }  // namespace
 
 GraspMoveTwistController::GraspMoveTwistController(const Config& cfg)
-    : cfg_(validated(cfg)), flags_(cfg_), speed_(cfg_), one_(cfg_), two_(cfg_) {}
+    : cfg_(validated(cfg)), flags_(cfg_), detector_(cfg_), speed_(cfg_), one_(cfg_), two_(cfg_) {}
 
 Phase GraspMoveTwistController::current_phase() const {
   switch (stage_) {
@@ -126,7 +126,13 @@ void GraspMoveTwistController::step_sequencers(const ControllerInput& in, const 
 
 ControllerOutput GraspMoveTwistController::update(const ControllerInput& in) noexcept {
   ControllerOutput out;
-  out.flags = flags_.analyze(in.fingertips, mode_, is_twist_phase(phase_));
+  // SLIP from the configured detector, on the threshold of the step the frame was taken in.
+  const ArmMotion arm = arm_motion_.update(in.arm.wrist, in.now_s);
+  const double threshold = flags_.dr(is_twist_phase(phase_));
+  std::array<const FingertipSlip*, kFingertips> slips{};
+  for (std::size_t f = 0; f < kFingertips; ++f)
+    slips[f] = &detector_.update(f, in.fingertips[f], threshold, arm);
+  out.flags = flags_.analyze(in.fingertips, mode_, slips);
   out.phase = phase_;
   out.twist_cycle = two_.cycle();
   if (done()) return out;

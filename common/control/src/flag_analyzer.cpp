@@ -7,9 +7,14 @@
 
 namespace tactile::control {
 
-FingertipFlags FlagAnalyzer::analyze(const FingertipInput& in, bool twist_phase) const noexcept {
+namespace {
+
+// TOUCH, OVER and the largest F_z from the readings; SLIP from `slips(i)`, the decision on
+// element i of a fresh frame.
+template <typename Slips>
+FingertipFlags analyze_with(const FingertipInput& in, double f1_n, double f2_n,
+                            Slips slips) noexcept {
   FingertipFlags f;
-  const double threshold = dr(twist_phase);
   double best_fz = -std::numeric_limits<double>::infinity();
   double best_slip_fz = best_fz;
   // Indices travel as int32 (kNoElement = -1); a sensor has tens of elements.
@@ -20,8 +25,8 @@ FingertipFlags FlagAnalyzer::analyze(const FingertipInput& in, bool twist_phase)
     if (!r.contact) continue;
     if (!std::isfinite(r.fz) || !std::isfinite(r.dx_mm) || !std::isfinite(r.dy_mm)) continue;
     const auto index = static_cast<std::int32_t>(i);
-    if (r.fz > f1_n_) f.touch = true;
-    if (r.fz > f2_n_) f.over = true;
+    if (r.fz > f1_n) f.touch = true;
+    if (r.fz > f2_n) f.over = true;
     if (r.fz > best_fz) {
       best_fz = r.fz;
       f.max_fz_index = index;
@@ -30,7 +35,7 @@ FingertipFlags FlagAnalyzer::analyze(const FingertipInput& in, bool twist_phase)
     const double moved = std::hypot(r.dx_mm, r.dy_mm);
     if (!std::isfinite(moved)) continue;
     if (moved > f.max_slip_mm) f.max_slip_mm = moved;
-    if (in.fresh && moved > threshold) {
+    if (in.fresh && slips(i)) {
       f.slip = true;
       ++f.slipping_elements;
       if (r.fz > best_slip_fz) {
@@ -45,6 +50,21 @@ FingertipFlags FlagAnalyzer::analyze(const FingertipInput& in, bool twist_phase)
   return f;
 }
 
+}  // namespace
+
+FingertipFlags FlagAnalyzer::analyze(const FingertipInput& in, bool twist_phase) const noexcept {
+  const double threshold = dr(twist_phase);
+  return analyze_with(in, f1_n_, f2_n_,
+                      [&](std::size_t i) { return paper_slip(in.elements[i], threshold); });
+}
+
+FingertipFlags FlagAnalyzer::analyze(const FingertipInput& in,
+                                     const FingertipSlip& slip) const noexcept {
+  return analyze_with(in, f1_n_, f2_n_, [&](std::size_t i) {
+    return i < kMaxSlipElements && slipping(slip.state[i]);
+  });
+}
+
 Flags FlagAnalyzer::analyze(const std::array<FingertipInput, kFingertips>& in, FingerMode mode,
                             bool twist_phase) const noexcept {
   Flags flags;
@@ -52,6 +72,21 @@ Flags FlagAnalyzer::analyze(const std::array<FingertipInput, kFingertips>& in, F
   flags.move = mode == FingerMode::kMove;
   for (std::size_t f = 0; f < kFingertips; ++f) {
     flags.fingertip[f] = analyze(in[f], twist_phase);
+    flags.touch = flags.touch || flags.fingertip[f].touch;
+    flags.slip = flags.slip || flags.fingertip[f].slip;
+    flags.over = flags.over || flags.fingertip[f].over;
+  }
+  return flags;
+}
+
+Flags FlagAnalyzer::analyze(
+    const std::array<FingertipInput, kFingertips>& in, FingerMode mode,
+    const std::array<const FingertipSlip*, kFingertips>& slip) const noexcept {
+  Flags flags;
+  flags.search = mode == FingerMode::kSearch;
+  flags.move = mode == FingerMode::kMove;
+  for (std::size_t f = 0; f < kFingertips; ++f) {
+    flags.fingertip[f] = analyze(in[f], *slip[f]);
     flags.touch = flags.touch || flags.fingertip[f].touch;
     flags.slip = flags.slip || flags.fingertip[f].slip;
     flags.over = flags.over || flags.fingertip[f].over;

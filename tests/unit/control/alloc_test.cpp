@@ -28,8 +28,8 @@ void busy_world(ScriptedRig& rig, int& transport_frames) {
   rig.set_stale(1, transport_frames > 100 && transport_frames < 103);
 }
 
-TEST(Allocation, UpdateAllocatesNothing) {
-  GraspMoveTwistController ctl{Config{}};
+void expect_no_allocation(const Config& cfg) {
+  GraspMoveTwistController ctl{cfg};
   int transport_frames = 0;
   ScriptedRig rig({}, [&transport_frames](ScriptedRig& r) { busy_world(r, transport_frames); });
   std::size_t allocations = 0;
@@ -58,6 +58,16 @@ TEST(Allocation, UpdateAllocatesNothing) {
       found = found || s == k;
     EXPECT_TRUE(found) << to_string(k);
   }
+}
+
+TEST(Allocation, UpdateAllocatesNothing) {
+  expect_no_allocation(Config{});
+}
+
+TEST(Allocation, UpdateWithTheFieldDetectorAllocatesNothing) {
+  Config cfg;
+  cfg.slip_detector = SlipDetectorKind::kField;
+  expect_no_allocation(cfg);
 }
 
 TEST(Allocation, CounterSeesAllocations) {

@@ -105,6 +105,9 @@ class ScriptedRig {
         const bool moved = r.has_displacement && injected_[f][i].z > 0;
         r.dx_mm = moved ? injected_[f][i].x : 0.0;
         r.dy_mm = moved ? injected_[f][i].y : 0.0;
+        // A slipping element carries a shear load (half its normal force): what makes a
+        // motion a slip for the field detector too.
+        r.fy = moved ? 0.5 * r.fz : 0.0;
         injected_[f][i] = {};
       }
       FingertipInput& t = in.fingertips[f];

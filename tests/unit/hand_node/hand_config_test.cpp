@@ -58,6 +58,19 @@ TEST_F(HandConfigFile, PairWindowDefaultsOnAndIsRead) {
   EXPECT_TRUE(warnings.empty()) << warnings.front();
 }
 
+// The slip detector is the paper's rule unless the configuration names another.
+TEST_F(HandConfigFile, SlipDetectorDefaultsToThePapersRuleAndIsRead) {
+  std::vector<std::string> warnings;
+  EXPECT_EQ(load_hand_config(write(""), &warnings).controller.slip_detector,
+            control::SlipDetectorKind::kPaper);
+  const auto field =
+      load_hand_config(write("controller:\n  slip_detector: field\n  field_edge_ratio: 0.6\n"),
+                       &warnings)
+          .controller;
+  EXPECT_EQ(field.slip_detector, control::SlipDetectorKind::kField);
+  EXPECT_DOUBLE_EQ(field.field_edge_ratio, 0.6);
+}
+
 TEST_F(HandConfigFile, StartAfterFramesDefaultsTo20AndIsRead) {
   std::vector<std::string> warnings;
   EXPECT_EQ(load_hand_config(write(""), &warnings).start_after_frames, 20);
@@ -106,6 +119,8 @@ TEST_F(HandConfigFile, AMisspeltKeyIsRefusedAtItsLineWithTheClosestKey) {
           ":5: unknown key 'sched' in 'realtime' (known keys: priority, lock_memory)");
   refused("controller:\n  f1_n: 0.5\n  twist_dr_facter: 2\n",
           ":7: unknown key 'twist_dr_facter' in 'controller' (did you mean 'twist_dr_factor'?)");
+  refused("controller:\n  slip_detector: fields\n",
+          ":6: key 'controller.slip_detector': must be paper or field, is 'fields'");
 }
 
 TEST_F(HandConfigFile, BadRealtimeNamesFileKeyAndValue) {

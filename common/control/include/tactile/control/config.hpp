@@ -4,6 +4,8 @@
 // docs/control.md lists them with units; keep the two in step.
 #include <cstdint>
 #include <numbers>
+#include <optional>
+#include <string_view>
 
 #include "tactile/geometry.hpp"
 
@@ -15,6 +17,12 @@ enum class Task : std::uint8_t {
   kTwistOnly,         // Phase II only, with the wrist pose of the first update as reference
 };
 const char* to_string(Task t);
+
+// Which slip detector raises SLIP (docs/slip.md, "The detectors"): the paper's rule, or the field
+// detector (rigid-motion residual, friction-cone load, arm motion).
+enum class SlipDetectorKind : std::uint8_t { kPaper, kField };
+const char* to_string(SlipDetectorKind k);
+std::optional<SlipDetectorKind> slip_detector_from_string(std::string_view name);
 
 struct Config {
   Task task = Task::kGraspMoveTwist;
@@ -33,6 +41,28 @@ struct Config {
   // The gravity direction in the fingertip frame when the hand is upright. Only its x and y
   // components act: the displacement has none along z_f.
   Vec3 gravity_axis{0.0, 1.0, 0.0};
+  // The slip detector: kPaper is the paper's rule (an element slips when its centroid moves more
+  // than dr in a frame).
+  SlipDetectorKind slip_detector = SlipDetectorKind::kPaper;
+  // The field detector's parameters (docs/slip.md). An element moving more than dr counts as
+  // slipping only when loaded beyond this fraction of the friction estimate (Cattaneo-Mindlin
+  // partial slip), or when it was slipping.
+  double field_partial_slip_ratio = 0.1;
+  // An element loaded beyond this fraction of the friction estimate is at the cone's edge: a
+  // slipping element stays slipping there while the contact or the arm moves.
+  double field_edge_ratio = 0.7;
+  // A fall of the load ratio |F_t| / F_n by more than this fraction of mu in one frame, from the
+  // cone's edge, is a breakaway.
+  double field_drop_ratio = 0.1;
+  // The friction estimate starts here and rises with the loads the elements carry (a load ratio
+  // |F_t| / F_n never exceeds mu). Not the cap's friction: a starting point, the middle of the
+  // range the detector is meant for (0.4-1.2).
+  double field_mu_initial = 0.7;
+  // Elements pressed less than this carry no usable load ratio.
+  double field_min_fz_n = 0.05;
+  // The arm moves when the wrist's reported speed or yaw rate exceeds these.
+  double field_arm_speed_mps = 0.002;
+  double field_arm_yaw_rate_rps = 0.02;
   // A slip is classified only when its displacement along gravity exceeds this in magnitude.
   // 0 is the paper's rule (the sign alone decides).
   double direction_deadband_mm = 0.0;

@@ -17,6 +17,7 @@
 #include "tactile/control/flag_analyzer.hpp"
 #include "tactile/control/phase_one.hpp"
 #include "tactile/control/phase_two.hpp"
+#include "tactile/control/slip_detector.hpp"
 #include "tactile/control/types.hpp"
 
 namespace tactile::control {
@@ -50,6 +51,8 @@ class GraspMoveTwistController {
 
   Config cfg_;
   FlagAnalyzer flags_;
+  SlipDetector detector_;
+  ArmMotionEstimator arm_motion_;
   FingerSpeedEstimator speed_;
   PhaseOneSequencer one_;
   PhaseTwoSequencer two_;

@@ -6,6 +6,7 @@
 #include <array>
 
 #include "tactile/control/config.hpp"
+#include "tactile/control/slip_detector.hpp"
 #include "tactile/control/types.hpp"
 
 namespace tactile::control {
@@ -22,10 +23,14 @@ class FlagAnalyzer {
   // in-contact reading with has_displacement on a fresh frame can slip: a frame seen again
   // must not count twice.
   FingertipFlags analyze(const FingertipInput& in, bool twist_phase) const noexcept;
+  // The same with SLIP from a slip detector's decisions on this frame (SlipDetector::update).
+  FingertipFlags analyze(const FingertipInput& in, const FingertipSlip& slip) const noexcept;
 
   // Both fingertips, with the fingers' mode.
   Flags analyze(const std::array<FingertipInput, kFingertips>& in, FingerMode mode,
                 bool twist_phase) const noexcept;
+  Flags analyze(const std::array<FingertipInput, kFingertips>& in, FingerMode mode,
+                const std::array<const FingertipSlip*, kFingertips>& slip) const noexcept;
 
  private:
   double f1_n_;

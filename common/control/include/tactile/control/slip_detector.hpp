@@ -1,0 +1,130 @@
+#pragma once
+
+// Slip detection per element and per fingertip, behind one interface (docs/slip.md, "The
+// detectors"): the paper's rule and the field detector.
+//
+// paper: an in-contact element of a fresh frame slips when its centroid moved more than dr in
+//   the frame (the paper's section IV; stateless).
+// field: each element's displacement against the rigid motion (translation and rotation) fitted
+//   to the contact's elements, its friction-cone load |F_t| / F_n against a friction coefficient
+//   estimated online from the loads it has seen break away, and the arm's reported motion that
+//   the contact's shear does not follow. Per element a state (stick, incipient, slip) with a
+//   slip velocity. No friction coefficient is configured.
+//
+// Pure and allocation-free; every output is finite whatever the input (NaN readings count as no
+// contact). Elements beyond kMaxSlipElements of one fingertip are ignored (the sensor has 41).
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "tactile/control/config.hpp"
+#include "tactile/control/types.hpp"
+
+namespace tactile::control {
+
+inline constexpr std::size_t kMaxSlipElements = 64;
+
+enum class ElementSlipState : std::uint8_t {
+  kNone,       // not in contact, or no displacement measured
+  kStick,      // in contact, not slipping
+  kIncipient,  // slipping while the contact as a whole sticks (partial slip)
+  kSlip,       // slipping with the contact moving as a whole (gross slip)
+};
+const char* to_string(ElementSlipState s);
+inline bool slipping(ElementSlipState s) {
+  return s == ElementSlipState::kIncipient || s == ElementSlipState::kSlip;
+}
+
+// The arm's reported motion at this frame (the wrist's speed and yaw rate), from the ArmState
+// feedback: the motion the contact's shear should follow when the cap is held.
+struct ArmMotion {
+  double speed_mps = 0;
+  double yaw_rate_rps = 0;
+};
+
+// The arm's motion from successive reported wrist poses and the caller's clock: the controller
+// feeds it ArmFeedback::wrist, the rig the same pose. A first pose, a time that does not advance
+// or a non-finite value gives no motion.
+class ArmMotionEstimator {
+ public:
+  ArmMotion update(const WristPose& wrist, double now_s) noexcept;
+  void reset() noexcept { has_last_ = false; }
+
+ private:
+  bool has_last_ = false;
+  WristPose last_;
+  double last_s_ = 0;
+  ArmMotion motion_;
+};
+
+// Why an element was decided slipping (bits of FingertipSlip::reasons): its own motion beyond dr
+// under load (the paper's test, with the field detector's load gate), its departure from the
+// contact's rigid motion, a breakaway (the load ratio fell from the cone's edge), or a slip that
+// goes on at the cone's edge while the contact or the arm moves.
+inline constexpr std::uint8_t kSlipMoved = 1;
+inline constexpr std::uint8_t kSlipLeftRigid = 2;
+inline constexpr std::uint8_t kSlipBrokeAway = 4;
+inline constexpr std::uint8_t kSlipDragged = 8;
+
+// One fingertip's decisions on its latest fresh frame.
+struct FingertipSlip {
+  std::array<ElementSlipState, kMaxSlipElements> state{};
+  // Estimated slip of each slipping element over the frame (mm per frame), 0 otherwise.
+  std::array<double, kMaxSlipElements> slip_mm{};
+  std::array<std::uint8_t, kMaxSlipElements> reasons{};  // kSlip* bits, 0 when not slipping
+  std::uint32_t incipient = 0;                           // elements in kIncipient
+  std::uint32_t slipping = 0;                            // elements in kIncipient or kSlip
+  ElementSlipState fingertip = ElementSlipState::kNone;  // the worst element's state
+  // The contact's fitted rigid motion over the frame (mm per frame) at its centroid.
+  double rigid_mm = 0;
+  // The friction coefficient estimated so far (field; 0 for paper).
+  double mu_estimate = 0;
+};
+
+// The paper's test on one reading: in contact, displacement measured, |(dx, dy)| > threshold.
+bool paper_slip(const ElementReading& r, double threshold_mm) noexcept;
+
+class SlipDetector {
+ public:
+  // The kind and the field detector's parameters come from `cfg` (validated by the caller).
+  SlipDetector(SlipDetectorKind kind, const Config& cfg);
+  explicit SlipDetector(const Config& cfg) : SlipDetector(cfg.slip_detector, cfg) {}
+
+  SlipDetectorKind kind() const { return kind_; }
+  // Forgets the elements' history and the friction estimate (a new task).
+  void reset() noexcept;
+
+  // One fingertip's frame. Only a fresh frame is decided and updates the history; otherwise the
+  // result is "nothing slips" with the history kept. `threshold_mm`: dr, or dr times the twist
+  // factor in Phase II (FlagAnalyzer::dr).
+  const FingertipSlip& update(std::size_t fingertip, const FingertipInput& in, double threshold_mm,
+                              const ArmMotion& arm) noexcept;
+  const FingertipSlip& last(std::size_t fingertip) const { return out_[fingertip]; }
+
+ private:
+  struct History {
+    bool valid = false;
+    bool sliding = false;
+    double fz_n = 0;
+    double ratio = 0;
+  };
+  void decide_paper(const FingertipInput& in, double threshold_mm, FingertipSlip& out) noexcept;
+  void decide_field(std::size_t f, const FingertipInput& in, double threshold_mm,
+                    const ArmMotion& arm, FingertipSlip& out) noexcept;
+
+  SlipDetectorKind kind_;
+  double rho_;
+  double edge_;
+  double drop_;
+  double mu_initial_;
+  double fn_min_n_;
+  double arm_speed_mps_;
+  double arm_yaw_rps_;
+  std::array<std::array<History, kMaxSlipElements>, kFingertips> history_{};
+  // Per fingertip: each estimate depends only on its own fingertip's frames, so the order in which
+  // a caller feeds the two fingertips of one instant changes nothing.
+  std::array<double, kFingertips> mu_{};
+  std::array<FingertipSlip, kFingertips> out_{};
+};
+
+}  // namespace tactile::control

@@ -1,0 +1,264 @@
+// The slip detectors behind one interface (docs/slip.md, "The detectors"): the paper's rule as
+// the flag analyzer always decided it, and the field detector's rigid-motion residual,
+// friction-cone load and arm motion, each on hand-made fingertip frames.
+#include "tactile/control/slip_detector.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "tactile/control/flag_analyzer.hpp"
+
+namespace tactile::control {
+namespace {
+
+constexpr double kThr = 0.004;  // dr, mm per frame
+
+// A 5 x 5 grid of elements 20 px apart, all in contact, pressed with `fz`, sheared with
+// |F_t| = ratio * fz along x.
+struct Tip {
+  std::vector<ElementReading> r;
+  FingertipInput in;
+  explicit Tip(double fz = 0.5, double ratio = 0.3) {
+    for (int row = 0; row < 5; ++row) {
+      for (int col = 0; col < 5; ++col) {
+        ElementReading e;
+        e.id = static_cast<std::uint32_t>(r.size());
+        e.contact = true;
+        e.has_displacement = true;
+        e.x_px = 100.0 + 20.0 * col;
+        e.y_px = 100.0 + 20.0 * row;
+        e.fz = fz;
+        e.fx = ratio * fz;
+        r.push_back(e);
+      }
+    }
+    in.fresh = true;
+    sync();
+  }
+  void sync() { in.elements = r; }
+  void move_all(double dx, double dy) {
+    for (ElementReading& e : r) {
+      e.dx_mm = dx;
+      e.dy_mm = dy;
+    }
+  }
+};
+
+Config field_config() {
+  Config c;
+  c.slip_detector = SlipDetectorKind::kField;
+  return c;
+}
+
+std::size_t count_state(const FingertipSlip& s, std::size_t n, ElementSlipState state) {
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    k += s.state[i] == state ? 1 : 0;
+  return k;
+}
+
+TEST(SlipDetectorNames, RoundTripAndRefuseOthers) {
+  for (auto k : {SlipDetectorKind::kPaper, SlipDetectorKind::kField})
+    EXPECT_EQ(slip_detector_from_string(to_string(k)), k);
+  EXPECT_FALSE(slip_detector_from_string("Paper").has_value());
+  EXPECT_FALSE(slip_detector_from_string("").has_value());
+}
+
+// The paper detector is the flag analyzer's rule, element for element, on random frames with
+// NaNs, frames without displacement and elements out of contact.
+TEST(PaperDetector, DecidesAsTheFlagAnalyzersRule) {
+  Config cfg;
+  SlipDetector det(SlipDetectorKind::kPaper, cfg);
+  FlagAnalyzer flags(cfg);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-0.01, 0.01);
+  std::bernoulli_distribution coin(0.5), rare(0.05);
+  for (int frame = 0; frame < 2000; ++frame) {
+    Tip tip;
+    for (ElementReading& e : tip.r) {
+      e.contact = coin(rng);
+      e.has_displacement = coin(rng);
+      e.dx_mm = rare(rng) ? std::numeric_limits<double>::quiet_NaN() : u(rng);
+      e.dy_mm = u(rng);
+      e.fz = rare(rng) ? std::numeric_limits<double>::infinity() : 0.5;
+    }
+    tip.in.fresh = frame % 7 != 0;
+    tip.sync();
+    const bool twist = frame % 3 == 0;
+    const FingertipSlip& s = det.update(0, tip.in, flags.dr(twist), {});
+    const FingertipFlags old = flags.analyze(tip.in, twist);
+    const FingertipFlags now = flags.analyze(tip.in, s);
+    ASSERT_EQ(now.slip, old.slip) << frame;
+    ASSERT_EQ(now.slipping_elements, old.slipping_elements) << frame;
+    ASSERT_EQ(now.slip_max_fz_index, old.slip_max_fz_index) << frame;
+    ASSERT_EQ(now.touch, old.touch) << frame;
+  }
+}
+
+// The whole contact moving more than dr with a load: gross slip on every element.
+TEST(FieldDetector, ALoadedContactMovingAsAWholeSlips) {
+  SlipDetector det(field_config());
+  Tip tip(0.5, 0.3);
+  tip.move_all(0.0, 0.0);
+  det.update(0, tip.in, kThr, {});
+  tip.move_all(0.0, 3 * kThr);
+  const FingertipSlip& s = det.update(0, tip.in, kThr, {});
+  EXPECT_EQ(count_state(s, tip.r.size(), ElementSlipState::kSlip), tip.r.size());
+  EXPECT_EQ(s.fingertip, ElementSlipState::kSlip);
+  EXPECT_NEAR(s.rigid_mm, 3 * kThr, 1e-12);
+  EXPECT_NEAR(s.slip_mm[0], 3 * kThr, 1e-12);
+}
+
+// The same motion without load (far inside the friction cone, below the partial-slip ratio of the
+// friction estimate) is not a slip: the paper's rule would call it one.
+TEST(FieldDetector, AnUnloadedContactMovingIsNotASlip) {
+  SlipDetector det(field_config());
+  Tip tip(0.5, 0.01);
+  det.update(0, tip.in, kThr, {});
+  tip.move_all(0.0, 3 * kThr);
+  const FingertipSlip& s = det.update(0, tip.in, kThr, {});
+  EXPECT_EQ(s.slipping, 0U);
+  EXPECT_EQ(count_state(s, tip.r.size(), ElementSlipState::kStick), tip.r.size());
+}
+
+// A rotation is a rigid motion too: fitted, it leaves no residual; the elements it carries more
+// than dr slip (gross, rotational), the others stick.
+TEST(FieldDetector, ARotationIsFittedAsRigid) {
+  SlipDetector det(field_config());
+  Tip tip(0.5, 0.3);
+  det.update(0, tip.in, kThr, {});
+  const double w = 0.5 * kThr / 20.0;  // mm per px: the corners move 2.8 dr, the centre 0
+  for (ElementReading& e : tip.r) {
+    e.dx_mm = -w * (e.y_px - 140.0);
+    e.dy_mm = w * (e.x_px - 140.0);
+  }
+  tip.sync();
+  const FingertipSlip& s = det.update(0, tip.in, kThr, {});
+  EXPECT_NEAR(s.rigid_mm, 0.0, 1e-12);
+  EXPECT_EQ(s.incipient, 0U);
+  for (std::size_t i = 0; i < tip.r.size(); ++i) {
+    const double r_px = std::hypot(tip.r[i].x_px - 140.0, tip.r[i].y_px - 140.0);
+    EXPECT_EQ(s.state[i], w * r_px > kThr ? ElementSlipState::kSlip : ElementSlipState::kStick)
+        << i;
+  }
+}
+
+// One element left behind by a contact that sticks: incipient slip on it alone.
+TEST(FieldDetector, AnElementLeavingTheRigidMotionIsIncipient) {
+  SlipDetector det(field_config());
+  Tip tip(0.5, 0.3);
+  det.update(0, tip.in, kThr, {});
+  tip.move_all(0.0, 0.2 * kThr);
+  tip.r[0].dy_mm = -2.5 * kThr;
+  tip.sync();
+  const FingertipSlip& s = det.update(0, tip.in, kThr, {});
+  EXPECT_EQ(s.state[0], ElementSlipState::kIncipient);
+  EXPECT_EQ(s.incipient, 1U);
+  EXPECT_EQ(s.slipping, 1U);
+  EXPECT_EQ(s.fingertip, ElementSlipState::kIncipient);
+  EXPECT_NEAR(s.slip_mm[0], 2.7 * kThr, 1e-9);
+}
+
+// The friction estimate is the largest load ratio held for two frames; a fall of the shear force
+// from the cone's edge is a breakaway, even when the element's centroid barely moved.
+TEST(FieldDetector, FrictionIsLearnedAndABreakawayIsASlip) {
+  SlipDetector det(field_config());
+  Tip tip(0.5, 0.8);
+  det.update(0, tip.in, kThr, {});
+  EXPECT_DOUBLE_EQ(det.update(0, tip.in, kThr, {}).mu_estimate, 0.8);
+  tip.r[3].fx = 0.3 * 0.5;  // 0.8 -> 0.3 of F_n: the spring let go
+  tip.r[3].dx_mm = -0.5 * kThr;
+  tip.sync();
+  const FingertipSlip& s = det.update(0, tip.in, kThr, {});
+  EXPECT_TRUE(slipping(s.state[3]));
+  EXPECT_EQ(s.slipping, 1U);
+  EXPECT_DOUBLE_EQ(s.mu_estimate, 0.8);
+}
+
+// A slipping element stays slipping at the cone's edge while the arm drives the contact, and
+// stops when the arm stops.
+TEST(FieldDetector, SlipContinuesAtTheConesEdgeWhileTheArmMoves) {
+  SlipDetector det(field_config());
+  Tip tip(0.5, 0.8);
+  det.update(0, tip.in, kThr, {});
+  det.update(0, tip.in, kThr, {});
+  tip.move_all(3 * kThr, 0.0);
+  EXPECT_EQ(det.update(0, tip.in, kThr, {}).slipping, tip.r.size());
+  tip.move_all(0.1 * kThr, 0.0);
+  const ArmMotion turning{0.0, 0.5};
+  EXPECT_EQ(det.update(0, tip.in, kThr, turning).slipping, tip.r.size());
+  EXPECT_EQ(det.update(0, tip.in, kThr, {}).slipping, 0U);
+}
+
+// A frame seen again decides nothing and keeps the history.
+TEST(FieldDetector, AFrameSeenAgainDecidesNothing) {
+  SlipDetector det(field_config());
+  Tip tip(0.5, 0.3);
+  det.update(0, tip.in, kThr, {});
+  tip.move_all(0.0, 3 * kThr);
+  tip.in.fresh = false;
+  EXPECT_EQ(det.update(0, tip.in, kThr, {}).slipping, 0U);
+  tip.in.fresh = true;
+  EXPECT_EQ(det.update(0, tip.in, kThr, {}).slipping, tip.r.size());
+}
+
+// Whatever the readings hold, the decisions and numbers stay finite and the states valid.
+TEST(FieldDetector, FiniteOnEveryInput) {
+  SlipDetector det(field_config());
+  std::mt19937_64 rng(11);
+  const double specials[] = {std::numeric_limits<double>::quiet_NaN(),
+                             std::numeric_limits<double>::infinity(),
+                             -std::numeric_limits<double>::infinity(),
+                             1e308,
+                             -1e308,
+                             0.0,
+                             1e-300,
+                             std::numeric_limits<double>::denorm_min()};
+  std::uniform_int_distribution<int> pick(0, 15);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const auto value = [&] {
+    const int p = pick(rng);
+    return p < 8 ? specials[p] : u(rng);
+  };
+  for (int frame = 0; frame < 3000; ++frame) {
+    Tip tip;
+    for (ElementReading& e : tip.r) {
+      e.contact = pick(rng) % 2 == 0;
+      e.has_displacement = pick(rng) % 3 != 0;
+      e.dx_mm = value();
+      e.dy_mm = value();
+      e.fx = value();
+      e.fy = value();
+      e.fz = value();
+      e.x_px = pick(rng) == 0 ? value() : e.x_px;
+    }
+    tip.sync();
+    const ArmMotion arm{value(), value()};
+    const FingertipSlip& s = det.update(frame % 2, tip.in, kThr, arm);
+    ASSERT_TRUE(std::isfinite(s.rigid_mm)) << frame;
+    ASSERT_TRUE(std::isfinite(s.mu_estimate)) << frame;
+    for (std::size_t i = 0; i < kMaxSlipElements; ++i) {
+      ASSERT_TRUE(std::isfinite(s.slip_mm[i])) << frame;
+      ASSERT_LE(static_cast<int>(s.state[i]), static_cast<int>(ElementSlipState::kSlip));
+    }
+  }
+}
+
+TEST(ArmMotionEstimator, SpeedAndYawRateFromSuccessivePoses) {
+  ArmMotionEstimator est;
+  EXPECT_EQ(est.update({{0, 0, 0}, 0.0}, 1.0).speed_mps, 0.0);
+  const ArmMotion m = est.update({{0.003, 0.004, 0}, -0.05}, 1.1);
+  EXPECT_NEAR(m.speed_mps, 0.05, 1e-12);
+  EXPECT_NEAR(m.yaw_rate_rps, -0.5, 1e-12);
+  // A time that does not advance keeps the last motion; a non-finite pose gives none.
+  EXPECT_NEAR(est.update({{1, 1, 1}, 3.0}, 1.1).speed_mps, 0.05, 1e-12);
+  EXPECT_EQ(est.update({{std::nan(""), 0, 0}, 0.0}, 1.2).speed_mps, 0.0);
+}
+
+}  // namespace
+}  // namespace tactile::control
