@@ -122,6 +122,14 @@ int run(int argc, char** argv) {
                                    "combine these sweep directories (shards of one sweep)")
                         ->allow_extra_args(true)
                         ->excludes(sweep_opt);
+  std::string slip_detector;
+  app.add_option("--slip-detector", slip_detector,
+                 "the controller's slip detector, paper or field, overriding the scenario's "
+                 "controller.slip_detector (docs/slip.md)");
+  std::string detectors = "paper,field";
+  app.add_option("--detectors", detectors,
+                 "sweep: run every scenario once with each of these slip detectors")
+      ->capture_default_str();
   app.add_option("--seed", sweep.seed, "sweep: the draw's seed")->capture_default_str();
   app.add_option("--out", sweep.out, "sweep, sweep-merge: the output directory");
   app.add_option("--jobs", sweep.jobs, "sweep: child processes at a time (default: the cores)")
@@ -162,12 +170,33 @@ int run(int argc, char** argv) {
           throw tactile::cli::UsageError("--shard K/N needs 1 <= K <= N; got '" + shard + "'");
         }
       }
+      if (!slip_detector.empty())
+        throw tactile::cli::UsageError("--sweep takes --detectors, not --slip-detector");
+      sweep.detectors.clear();
+      for (std::size_t at = 0; at <= detectors.size();) {
+        const std::size_t comma = std::min(detectors.find(',', at), detectors.size());
+        const std::string name = detectors.substr(at, comma - at);
+        if (!tactile::control::slip_detector_from_string(name) ||
+            std::find(sweep.detectors.begin(), sweep.detectors.end(), name) !=
+                sweep.detectors.end()) {
+          throw tactile::cli::UsageError(
+              "--detectors must list paper and/or field, each once, separated by commas; got '" +
+              detectors + "'");
+        }
+        sweep.detectors.push_back(name);
+        at = comma + 1;
+      }
       tactile::util::install_stop_handlers();
       tactile::rig::sweep::run_sweep(sweep);
       return 0;
     }
     if (scenario_path.empty()) throw tactile::cli::UsageError("--scenario is required");
-    const tactile::rig::Scenario scenario = tactile::rig::load_scenario(scenario_path);
+    if (!slip_detector.empty() && !tactile::control::slip_detector_from_string(slip_detector)) {
+      throw tactile::cli::UsageError("--slip-detector must be paper or field; got '" +
+                                     slip_detector + "'");
+    }
+    tactile::rig::Scenario scenario = tactile::rig::load_scenario(scenario_path);
+    if (!slip_detector.empty()) scenario.slip_detector = slip_detector;
     if (!cameras.empty()) {
       const auto comma = cameras.find(',');
       if (comma == std::string::npos) {

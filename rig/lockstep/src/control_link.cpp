@@ -19,6 +19,14 @@ control::Config scenario_controller_config(const Scenario& sc) {
                                   " is not a controller setting");
     }
   }
+  if (!sc.slip_detector.empty()) {
+    const auto kind = control::slip_detector_from_string(sc.slip_detector);
+    if (!kind) {
+      throw std::invalid_argument(sc.source + ": controller.slip_detector = " + sc.slip_detector +
+                                  ": must be paper or field");
+    }
+    cfg.slip_detector = *kind;
+  }
   cfg.validate();
   return cfg;
 }

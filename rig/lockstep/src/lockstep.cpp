@@ -32,20 +32,26 @@ double nearest_rank_percentile(std::vector<double> v, double q) {
   return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
 }
 
-void SlipScorer::add(std::size_t i, std::size_t k, std::uint64_t frame, bool predicted,
+void SlipScorer::add(std::size_t i, std::size_t k, std::uint64_t frame, bool predicted, bool ideal,
                      const ElementTruth& et, double thr) {
   m_.true_positives += predicted && et.sliding ? 1 : 0;
   m_.false_positives += predicted && !et.sliding ? 1 : 0;
   m_.false_negatives += !predicted && et.sliding ? 1 : 0;
+  ideal_.add(ideal, et.sliding);
   Element& es = elements_[i][k];
-  const bool ideal =
-      et.visible && es.was_visible && std::hypot(et.ux_mm - es.ux_mm, et.uy_mm - es.uy_mm) > thr;
-  ideal_tp_ += ideal && et.sliding ? 1 : 0;
-  ideal_fp_ += ideal && !et.sliding ? 1 : 0;
-  ideal_fn_ += !ideal && et.sliding ? 1 : 0;
+  const bool changed = et.visible != es.was_visible;
+  const double motion = std::max(et.slip_mm, et.surface_mm);
+  const bool edge = changed || es.visibility_changed ||
+                    (et.load_ratio >= 0.07 && et.load_ratio <= 0.13) ||
+                    (motion >= 0.67 * thr && motion <= 1.5 * thr);
+  if (edge) {
+    ++m_.edge_frames;
+  } else {
+    clear_.add(predicted, et.sliding);
+    ideal_clear_.add(ideal, et.sliding);
+  }
   es.was_visible = et.visible;
-  es.ux_mm = et.ux_mm;
-  es.uy_mm = et.uy_mm;
+  es.visibility_changed = changed;
   if (et.sliding && !es.was_sliding) {
     ++m_.onsets;
     if (es.pending) {  // a new episode before the last was covered
@@ -79,11 +85,17 @@ void SlipScorer::finish(SlipMetrics& out) {
   }
   m_.precision = ratio(m_.true_positives, m_.false_positives);
   m_.recall = ratio(m_.true_positives, m_.false_negatives);
-  m_.ideal_precision = ratio(ideal_tp_, ideal_fp_);
-  m_.ideal_recall = ratio(ideal_tp_, ideal_fn_);
+  m_.ideal_precision = ratio(ideal_.tp, ideal_.fp);
+  m_.ideal_recall = ratio(ideal_.tp, ideal_.fn);
+  m_.precision_clear = ratio(clear_.tp, clear_.fp);
+  m_.recall_clear = ratio(clear_.tp, clear_.fn);
+  m_.ideal_precision_clear = ratio(ideal_clear_.tp, ideal_clear_.fp);
+  m_.ideal_recall_clear = ratio(ideal_clear_.tp, ideal_clear_.fn);
   m_.latency_frames_p50 = nearest_rank_percentile(latencies_, 0.50);
   m_.latency_frames_p99 = nearest_rank_percentile(latencies_, 0.99);
+  const std::string detector = out.detector;
   out = m_;
+  out.detector = detector;
 }
 
 LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
@@ -125,6 +137,7 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   }
 
   control::GraspMoveTwistController controller(cfg);
+  control::ArmMotionEstimator arm_motion;
   control::Phase phase = control::Phase::kIdle;
   bool done_seen = false;
   double done_at = 0;
@@ -171,10 +184,12 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
       in.arm.fingertip_position_m[i] = world.fingertip(i).offset_w;
     in.now_s = t;
     const control::ControllerOutput out = controller.update(in);
+    // The arm's motion as the controller saw it, for the scorer's detectors.
+    const control::ArmMotion arm = arm_motion.update(in.arm.wrist, in.now_s);
 
     scorer.add_truth(frame, t, gt, {out.phase, out.twist_cycle}, frame_pose(world, transport));
     for (std::size_t i = 0; i < kFingertips; ++i)
-      scorer.add_measurement(i, frame, extractors[i].readings(), gt.fingertips[i], phase);
+      scorer.add_measurement(i, frame, extractors[i].readings(), gt.fingertips[i], phase, arm);
     for (const control::Event& e : out.events)
       scorer.add_event(e, t);
 
@@ -226,13 +241,13 @@ std::string series_csv(const RunSeries& series) {
 std::string mismatches_csv(const RunSeries& series) {
   std::string o =
       "t,fingertip,element,measured_slip,measured_d_mm,measured_fz,true_sliding,true_fz,"
-      "releases,slip_mm,surface_mm,load_ratio,ux_mm,uy_mm\n";
+      "releases,slip_mm,surface_mm,load_ratio,ux_mm,uy_mm,reasons\n";
   for (const Mismatch& m : series.mismatches) {
     o += fmt::format(
-        "{:.3f},{},{},{:d},{:.5f},{:.4f},{:d},{:.4f},{},{:.5f},{:.5f},{:.3f},{:.5f},{:.5f}\n", m.t,
-        m.fingertip, m.element, m.measured_slip, m.measured_d_mm, m.measured_fz, m.truth.sliding,
-        m.truth.fz_n, m.truth.releases, m.truth.slip_mm, m.truth.surface_mm, m.truth.load_ratio,
-        m.truth.ux_mm, m.truth.uy_mm);
+        "{:.3f},{},{},{:d},{:.5f},{:.4f},{:d},{:.4f},{},{:.5f},{:.5f},{:.3f},{:.5f},{:.5f},{}\n",
+        m.t, m.fingertip, m.element, m.measured_slip, m.measured_d_mm, m.measured_fz,
+        m.truth.sliding, m.truth.fz_n, m.truth.releases, m.truth.slip_mm, m.truth.surface_mm,
+        m.truth.load_ratio, m.truth.ux_mm, m.truth.uy_mm, m.reasons);
   }
   return o;
 }
@@ -243,16 +258,25 @@ std::string report_json(const Report& r) {
   const auto precision_recall = [](double precision, double recall) {
     return ordered_json{{"precision", precision}, {"recall", recall}};
   };
-  ordered_json slip = precision_recall(r.slip.precision, r.slip.recall);
-  // Nearest-rank percentiles of whole frame counts: whole numbers, written as integers.
-  slip["latency_frames_p50"] = std::llround(r.slip.latency_frames_p50);
-  slip["latency_frames_p99"] = std::llround(r.slip.latency_frames_p99);
-  slip["true_positives"] = r.slip.true_positives;
-  slip["false_positives"] = r.slip.false_positives;
-  slip["false_negatives"] = r.slip.false_negatives;
-  slip["onsets"] = r.slip.onsets;
-  slip["missed_onsets"] = r.slip.missed_onsets;
-  slip["ideal_sensor"] = precision_recall(r.slip.ideal_precision, r.slip.ideal_recall);
+  const auto slip_json = [&](const SlipMetrics& m) {
+    ordered_json slip = precision_recall(m.precision, m.recall);
+    // Nearest-rank percentiles of whole frame counts: whole numbers, written as integers.
+    slip["latency_frames_p50"] = std::llround(m.latency_frames_p50);
+    slip["latency_frames_p99"] = std::llround(m.latency_frames_p99);
+    slip["true_positives"] = m.true_positives;
+    slip["false_positives"] = m.false_positives;
+    slip["false_negatives"] = m.false_negatives;
+    slip["onsets"] = m.onsets;
+    slip["missed_onsets"] = m.missed_onsets;
+    ordered_json ideal = precision_recall(m.ideal_precision, m.ideal_recall);
+    ideal["without_edges"] = precision_recall(m.ideal_precision_clear, m.ideal_recall_clear);
+    slip["ideal_sensor"] = std::move(ideal);
+    slip["detector"] = m.detector;
+    slip["without_edges"] = precision_recall(m.precision_clear, m.recall_clear);
+    slip["edge_frames"] = m.edge_frames;
+    return slip;
+  };
+  ordered_json slip = slip_json(r.slip);
   ordered_json latency_ms = nullptr;
   if (r.latency_ms) {
     latency_ms = {
@@ -272,6 +296,7 @@ std::string report_json(const Report& r) {
       {"slip", std::move(slip)},
       {"force_rmse_N", {{"normal", r.force_rmse_normal_N}, {"shear", r.force_rmse_shear_N}}},
       {"latency_ms", std::move(latency_ms)},
+      {"slip_other", slip_json(r.slip_other)},
       {"lockstep",
        {{"seed", r.seed},
         {"sim_time_s", r.sim_time_s},

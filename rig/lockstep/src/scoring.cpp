@@ -26,10 +26,27 @@ FramePose frame_pose(const World& world, Vec3 transport) {
   return p;
 }
 
+namespace {
+
+control::SlipDetectorKind other(control::SlipDetectorKind k) {
+  return k == control::SlipDetectorKind::kPaper ? control::SlipDetectorKind::kField
+                                                : control::SlipDetectorKind::kPaper;
+}
+
+}  // namespace
+
 RunScorer::RunScorer(LockstepResult& run, const control::Config& cfg, bool record_series)
-    : run_(run), flags_(cfg), record_(record_series) {
+    : run_(run),
+      flags_(cfg),
+      record_(record_series),
+      measured_{control::SlipDetector(cfg.slip_detector, cfg),
+                control::SlipDetector(other(cfg.slip_detector), cfg)},
+      ideal_{control::SlipDetector(cfg.slip_detector, cfg),
+             control::SlipDetector(other(cfg.slip_detector), cfg)} {
   const Calibration& cal = run.calibrations[0];
   run_.report.normal_full_scale_N = cal.normal_curve.y().back();
+  run_.report.slip.detector = control::to_string(cfg.slip_detector);
+  run_.report.slip_other.detector = control::to_string(other(cfg.slip_detector));
 }
 
 FrameSample* RunScorer::sample_for(std::uint64_t frame) {
@@ -74,31 +91,76 @@ void RunScorer::add_truth(std::uint64_t frame, double t, const GroundTruth& gt,
 
 void RunScorer::add_measurement(std::size_t i, std::uint64_t frame,
                                 std::span<const ElementReading> readings,
-                                const FingertipTruth& truth, control::Phase phase) {
+                                const FingertipTruth& truth, control::Phase phase,
+                                const control::ArmMotion& arm) {
   Report& rep = run_.report;
   const bool twist = control::is_twist_phase(phase);
   const double thr = flags_.dr(twist);
   FrameSample* sample = record_ ? sample_for(frame) : nullptr;
   const double t = sample != nullptr ? sample->t : 0.0;
+
+  // The ideal sensor: what the truth says each element reads, its displacement the change of
+  // its true shear displacement since the last frame.
+  IdealTip& it = ideal_tips_[i];
+  for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
+    const ElementTruth& et = truth.elements[k];
+    ElementReading& r = it.readings[k];
+    r = ElementReading{};
+    r.id = static_cast<std::uint32_t>(k);
+    r.x_px = run_.calibrations[i].elements[k].center_px.x;
+    r.y_px = run_.calibrations[i].elements[k].center_px.y;
+    r.contact = et.visible;
+    r.has_displacement = et.visible && it.was_visible[k];
+    if (et.visible) {
+      r.ux_mm = et.ux_mm;
+      r.uy_mm = et.uy_mm;
+      r.fx = et.fx_n;
+      r.fy = et.fy_n;
+      r.fz = et.fz_n;
+    }
+    if (r.has_displacement) {
+      r.dx_mm = et.ux_mm - it.ux_mm[k];
+      r.dy_mm = et.uy_mm - it.uy_mm[k];
+    }
+    it.was_visible[k] = et.visible;
+    it.ux_mm[k] = et.ux_mm;
+    it.uy_mm[k] = et.uy_mm;
+  }
+  control::FingertipInput measured_in;
+  measured_in.elements = readings;
+  measured_in.fresh = true;
+  control::FingertipInput ideal_in;
+  ideal_in.elements = it.readings;
+  ideal_in.fresh = true;
+  std::array<const control::FingertipSlip*, 2> decided{};
+  for (std::size_t d = 0; d < 2; ++d) {
+    decided[d] = &measured_[d].update(i, measured_in, thr, arm);
+    const control::FingertipSlip& ideal = ideal_[d].update(i, ideal_in, thr, arm);
+    for (std::size_t k = 0; k < kElementsPerFingertip && k < readings.size(); ++k) {
+      slip_[d].add(i, k, frame, control::slipping(decided[d]->state[k]),
+                   control::slipping(ideal.state[k]), truth.elements[k], thr);
+    }
+  }
+  const control::FingertipSlip& run_slip = *decided[0];
+
   Latest& latest = latest_[i];
-  latest.threshold_mm = thr;
   double best = -1;
   for (std::size_t k = 0; k < kElementsPerFingertip && k < readings.size(); ++k) {
     const ElementReading& r = readings[k];
     const ElementTruth& et = truth.elements[k];
+    const bool predicted = control::slipping(run_slip.state[k]);
     latest.readings[k] = r;
     latest.true_sliding[k] = et.sliding;
+    latest.slip[k] = predicted;
     const double d = std::hypot(r.dx_mm, r.dy_mm);
-    const bool predicted = r.contact && r.has_displacement && d > thr;
-    slip_.add(i, k, frame, predicted, et, thr);
     if (sample != nullptr) {
       if (predicted && et.sliding) ++sample->tp[i];
       if (predicted && !et.sliding) ++sample->fp[i];
       if (!predicted && et.sliding) ++sample->fn[i];
     }
     if (record_ && predicted != et.sliding) {
-      run_.series.mismatches.push_back(
-          {t, static_cast<int>(i), static_cast<std::uint32_t>(k), predicted, d, r.fz, et});
+      run_.series.mismatches.push_back({t, static_cast<int>(i), static_cast<std::uint32_t>(k),
+                                        predicted, d, r.fz, run_slip.reasons[k], et});
     }
     if (et.visible || r.contact) {
       const double en = (r.contact ? r.fz : 0.0) - et.fz_n;
@@ -120,10 +182,7 @@ void RunScorer::add_measurement(std::size_t i, std::uint64_t frame,
   }
   if (sample != nullptr) {
     // TOUCH, SLIP and OVER as the controller's FlagAnalyzer decides them from this frame.
-    control::FingertipInput in;
-    in.elements = readings;
-    in.fresh = true;
-    const control::FingertipFlags f = flags_.analyze(in, twist);
+    const control::FingertipFlags f = flags_.analyze(measured_in, run_slip);
     sample->touch[i] = f.touch;
     sample->slip[i] = f.slip;
     sample->over[i] = f.over;
@@ -145,8 +204,7 @@ void RunScorer::snapshot(double t, const char* label) {
       s.x_px = run_.calibrations[i].elements[k].center_px.x;
       s.y_px = run_.calibrations[i].elements[k].center_px.y;
       s.contact = r.contact;
-      s.slip =
-          r.contact && r.has_displacement && std::hypot(r.dx_mm, r.dy_mm) > latest.threshold_mm;
+      s.slip = latest.slip[k];
       s.true_sliding = latest.true_sliding[k];
       s.ux_mm = r.ux_mm;
       s.uy_mm = r.uy_mm;
@@ -214,7 +272,8 @@ void RunScorer::add_event(const control::Event& e, double t) {
 
 void RunScorer::finish(bool dropped, double sim_time_s, std::uint64_t frames) {
   Report& rep = run_.report;
-  slip_.finish(rep.slip);
+  slip_[0].finish(rep.slip);
+  slip_[1].finish(rep.slip_other);
   rep.dropped = dropped;
   rep.frames = frames;
   rep.sim_time_s = sim_time_s;

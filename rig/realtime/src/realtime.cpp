@@ -14,6 +14,7 @@
 
 #include "tactile/camera/fake_gv_camera.hpp"
 #include "tactile/control/config.hpp"
+#include "tactile/control/slip_detector.hpp"
 #include "tactile/rig/arm_link.hpp"
 #include "tactile/rig/optics.hpp"
 #include "tactile/rig/scoring.hpp"
@@ -73,6 +74,7 @@ struct KeptTruth {
   std::int64_t send_ns = 0;  // the instant the cameras send it: its camera timestamp
   double t = 0;
   control::Phase phase = control::Phase::kIdle;  // the controller's, when it was taken
+  control::ArmMotion arm;  // the arm's motion from its reported poses, when it was taken
   GroundTruth truth;
   std::array<bool, kFingertips> scored{};
   // The block ids each fingertip's camera sent this image with, in order.
@@ -240,6 +242,7 @@ class RealtimeRun {
   const wire::FingertipIds wire_ids_{kFingertipIds[0], kFingertipIds[1]};
   std::array<wire::ReceivedFrame, kFingertips> measured_;
   std::deque<KeptTruth> kept_;
+  control::ArmMotionEstimator arm_motion_;
   std::vector<double> latencies_ms_;
 
   std::int64_t start_ns_ = 0;
@@ -405,7 +408,7 @@ void RealtimeRun::on_frame() {
   it->scored[tip] = true;
   ++c_.frames_scored;
   scorer_.add_measurement(tip, it->frame - first_frame_, measured_[tip].elements,
-                          it->truth.fingertips[tip], it->phase);
+                          it->truth.fingertips[tip], it->phase, it->arm);
 }
 
 void RealtimeRun::on_event() {
@@ -471,6 +474,7 @@ void RealtimeRun::render_frame(std::int64_t send_ns) {
   kt.send_ns = send_ns;
   kt.t = world_.time();
   kt.phase = phase_;
+  kt.arm = arm_motion_.update({world_.arm().position_m, world_.arm().yaw_rad}, kt.t);
   kt.truth = gt;
   kt.truth.twist_cycle = twist_cycle_;
   for (auto& ft : kt.truth.fingertips)
@@ -638,6 +642,7 @@ std::string hand_controller_yaml(const Scenario& sc) {
   num("bottle_x_m", cfg.bottle_x_m);
   num("bottle_y_m", cfg.bottle_y_m);
   o += fmt::format("  tighten_clockwise: {}\n", cfg.tighten_clockwise ? "true" : "false");
+  o += fmt::format("  slip_detector: {}\n", control::to_string(cfg.slip_detector));
   bool stale_set = false;
   for (const auto& [key, v] : sc.controller) {
     num(key.c_str(), v);

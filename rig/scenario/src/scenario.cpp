@@ -5,6 +5,7 @@
 #include <string_view>
 
 #include "tactile/config/yaml.hpp"
+#include "tactile/control/config.hpp"
 #include "tactile/util/files.hpp"
 
 namespace tactile::rig {
@@ -82,6 +83,14 @@ const std::vector<std::string>& controller_keys() {
       "max_twist_cycles",
       "search_timeout_s",
       "segment_timeout_s",
+      "slip_detector",
+      "field_partial_slip_ratio",
+      "field_edge_ratio",
+      "field_drop_ratio",
+      "field_mu_initial",
+      "field_min_fz_n",
+      "field_arm_speed_mps",
+      "field_arm_yaw_rate_rps",
   };
   return keys;
 }
@@ -207,11 +216,19 @@ void parse_sim(const Node& sim, Scenario& s) {
 }
 
 // Overrides of the controller's settings, by the names of controller_keys().
-void parse_controller(const Node& ctl, std::vector<std::pair<std::string, double>>& out) {
+void parse_controller(const Node& ctl, Scenario& s) {
   if (!ctl.is_map()) ctl.fail("must be a mapping of controller settings");
   ctl.refuse_unknown_keys(controller_keys());
-  for (const std::string& key : ctl.keys())
-    out.emplace_back(key, checked(ctl[key], -1e6, 1e6));
+  for (const std::string& key : ctl.keys()) {
+    if (key == "slip_detector") {
+      const Node n = ctl[key];
+      if (!control::slip_detector_from_string(n.as_string()))
+        n.fail("must be paper or field, is " + n.text());
+      s.slip_detector = n.as_string();
+      continue;
+    }
+    s.controller.emplace_back(key, checked(ctl[key], -1e6, 1e6));
+  }
 }
 
 }  // namespace
@@ -242,7 +259,7 @@ Scenario parse_scenario(const std::string& text, const std::string& source) {
   if (1.0 / (s.camera.fps * s.dt_s) < 1.0) {
     root["sim"]["dt_s"].fail("must not exceed the camera's frame period");
   }
-  if (auto ctl = root.find("controller")) parse_controller(*ctl, s.controller);
+  if (auto ctl = root.find("controller")) parse_controller(*ctl, s);
 
   // The fingertip's tangential law is the sensor's calibrated shear curve (see docs/rig.md).
   s.world.fingertip.shear_curve = PiecewiseLinear({0.0, 0.02, 0.08}, {0.0, 0.05, 0.4});

@@ -1,6 +1,7 @@
 // Running a sweep: one child rig process per scenario, J at a time (docs/slip.md, "The sweep").
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -55,17 +56,26 @@ struct Paths {
   fs::path log;
 };
 
-Paths paths_of(const fs::path& out, std::uint64_t index, std::uint64_t scenarios) {
+// Scenario NNNNN's file, and its run with `detector`'s report and log (NNNNN-DETECTOR).
+Paths paths_of(const fs::path& out, std::uint64_t index, std::uint64_t scenarios,
+               const std::string& detector) {
   const int width = std::max<int>(5, static_cast<int>(fmt::format("{}", scenarios).size()));
   const std::string name = fmt::format("{:0{}}", index, width);
-  return {out / "scenarios" / (name + ".yaml"), out / "reports" / (name + ".json"),
-          out / "logs" / (name + ".log")};
+  const std::string run = name + "-" + detector;
+  return {out / "scenarios" / (name + ".yaml"), out / "reports" / (run + ".json"),
+          out / "logs" / (run + ".log")};
 }
 
-// Starts PROGRAM --lockstep --scenario FILE --report FILE in its own process group (a Ctrl-C at
+struct Job {
+  std::uint64_t index = 0;
+  std::string detector;
+};
+
+// Starts PROGRAM --lockstep --scenario FILE --report FILE --slip-detector NAME in its own
+// process group (a Ctrl-C at
 // the terminal reaches the sweep alone, which stops its children), stdout to /dev/null, stderr to
 // the scenario's log.
-pid_t spawn_child(const std::string& program, const Paths& p) {
+pid_t spawn_child(const std::string& program, const Paths& p, const std::string& detector) {
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
@@ -74,8 +84,9 @@ pid_t spawn_child(const std::string& program, const Paths& p) {
   posix_spawnattr_init(&attr);
   posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
   posix_spawnattr_setpgroup(&attr, 0);
-  std::vector<std::string> args{program,    "--lockstep",     "--scenario", p.scenario.string(),
-                                "--report", p.report.string()};
+  std::vector<std::string> args{
+      program,    "--lockstep",      "--scenario",      p.scenario.string(),
+      "--report", p.report.string(), "--slip-detector", detector};
   std::vector<char*> argv;
   for (std::string& a : args)
     argv.push_back(a.data());
@@ -126,35 +137,46 @@ std::size_t run_sweep(const SweepOptions& o) {
 
   // Every scenario file first: each can be re-run alone, also those a stop leaves unrun.
   std::map<std::uint64_t, Draw> draws;
+  std::vector<Job> queue;
   for (const std::uint64_t i : indices) {
     draws[i] = draw_scenario(o.seed, i);
-    const Paths p = paths_of(o.out, i, o.scenarios);
-    util::write_file_atomic(p.scenario, scenario_yaml(draws[i], o.max_sim_time_s));
-    std::error_code ec;
-    fs::remove(p.report, ec);  // a report left by an earlier sweep is not this run's
+    util::write_file_atomic(paths_of(o.out, i, o.scenarios, "").scenario,
+                            scenario_yaml(draws[i], o.max_sim_time_s));
+    for (const std::string& detector : o.detectors) {
+      std::error_code ec;
+      // A report left by an earlier sweep is not this run's.
+      fs::remove(paths_of(o.out, i, o.scenarios, detector).report, ec);
+      queue.push_back({i, detector});
+    }
   }
 
-  util::log_info("sweep: {} scenarios (shard {}/{} of {} drawn with seed {}), {} at a time",
-                 indices.size(), o.shard, o.shards, o.scenarios, o.seed, jobs);
+  util::log_info(
+      "sweep: {} scenarios (shard {}/{} of {} drawn with seed {}), each with {}: {} runs, {} at "
+      "a time",
+      indices.size(), o.shard, o.shards, o.scenarios, o.seed, fmt::join(o.detectors, " and "),
+      queue.size(), jobs);
   const auto start = std::chrono::steady_clock::now();
   std::vector<Row> rows;
-  std::map<pid_t, std::uint64_t> running;
+  std::map<pid_t, Job> running;
   std::size_t next = 0;
   std::size_t done = 0;
   bool stopped = false;
-  while (next < indices.size() || !running.empty()) {
+  while (next < queue.size() || !running.empty()) {
     if (util::stop_requested() && !stopped) {
       stopped = true;
       util::log_warn("sweep: stopping {} running scenarios", running.size());
       for (const auto& [pid, index] : running)
         ::kill(pid, SIGTERM);
     }
-    while (!stopped && next < indices.size() && static_cast<int>(running.size()) < jobs) {
-      const std::uint64_t i = indices[next++];
+    while (!stopped && next < queue.size() && static_cast<int>(running.size()) < jobs) {
+      const Job job = queue[next++];
+      const std::uint64_t i = job.index;
       try {
-        running[spawn_child(program, paths_of(o.out, i, o.scenarios))] = i;
+        running[spawn_child(program, paths_of(o.out, i, o.scenarios, job.detector), job.detector)] =
+            job;
       } catch (const std::exception& e) {
-        rows.push_back(failed_row(draws[i], 127, e.what()));  // 127: the shell's "cannot run"
+        // 127: the shell's "cannot run"
+        rows.push_back(failed_row(draws[i], job.detector, 127, e.what()));
         util::log_warn("sweep: scenario {}: {}", i, e.what());
         ++done;
       }
@@ -168,33 +190,35 @@ std::size_t run_sweep(const SweepOptions& o) {
     }
     const auto it = running.find(pid);
     if (it == running.end()) continue;
-    const std::uint64_t i = it->second;
+    const Job job = it->second;
+    const std::uint64_t i = job.index;
     running.erase(it);
     if (stopped) continue;  // cut short by the stop: not a result
-    const Paths p = paths_of(o.out, i, o.scenarios);
+    const Paths p = paths_of(o.out, i, o.scenarios, job.detector);
     const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     if (code == 0) {
       try {
         for (Row& r : rows_from_report(draws[i], util::read_file(p.report)))
           rows.push_back(std::move(r));
       } catch (const std::exception& e) {
-        rows.push_back(
-            failed_row(draws[i], 0, util::one_line(std::string("bad report: ") + e.what())));
+        rows.push_back(failed_row(draws[i], job.detector, 0,
+                                  util::one_line(std::string("bad report: ") + e.what())));
       }
     } else {
-      rows.push_back(failed_row(draws[i], code, last_line(p.log)));
-      util::log_warn("sweep: scenario {} failed with status {}: {}", i, code, last_line(p.log));
+      rows.push_back(failed_row(draws[i], job.detector, code, last_line(p.log)));
+      util::log_warn("sweep: scenario {} ({}) failed with status {}: {}", i, job.detector, code,
+                     last_line(p.log));
     }
     ++done;
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double remaining =
-        elapsed / static_cast<double>(done) * static_cast<double>(indices.size() - done);
-    util::log_info("sweep: {}/{} done, {} elapsed, about {} remaining", done, indices.size(),
+        elapsed / static_cast<double>(done) * static_cast<double>(queue.size() - done);
+    util::log_info("sweep: {}/{} runs done, {} elapsed, about {} remaining", done, queue.size(),
                    duration_text(elapsed), duration_text(remaining));
   }
   SweepInfo info{o.seed, o.scenarios, o.max_sim_time_s, o.shard, o.shards, stopped};
-  if (stopped) util::log_warn("sweep: stopped; {} of {} scenarios ran", done, indices.size());
+  if (stopped) util::log_warn("sweep: stopped; {} of {} runs done", done, queue.size());
   write_outputs(rows, info, o.out);
   return rows.size();
 }

@@ -110,6 +110,10 @@ const std::vector<std::string>& columns() {
                                           "recall",
                                           "ideal_precision",
                                           "ideal_recall",
+                                          "precision_without_edges",
+                                          "recall_without_edges",
+                                          "ideal_precision_without_edges",
+                                          "ideal_recall_without_edges",
                                           "max_fz_N",
                                           "false_slips",
                                           "recompressions",
@@ -132,7 +136,9 @@ double Row::number(const std::string& column) const {
 
 std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json) {
   const json r = json::parse(report_json);
-  Row row = drawn_row(d, "paper");
+  const json& slip = need(r, "slip");
+  Row row = drawn_row(
+      d, slip.contains("detector") ? slip.at("detector").get<std::string>() : std::string("paper"));
   const auto set = [&](const char* column, std::string value) {
     row.cells[column_index(column)] = std::move(value);
   };
@@ -153,11 +159,19 @@ std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json)
   }
   // Seconds from the cap meeting its stop to "tight", once the report gives it.
   if (r.contains("tight_time_error_s")) set("tight_time_error_s", cell(r.at("tight_time_error_s")));
-  const json& slip = need(r, "slip");
   set("precision", cell(need(slip, "precision")));
   set("recall", cell(need(slip, "recall")));
-  set("ideal_precision", cell(need(need(slip, "ideal_sensor"), "precision")));
-  set("ideal_recall", cell(need(need(slip, "ideal_sensor"), "recall")));
+  const json& ideal = need(slip, "ideal_sensor");
+  set("ideal_precision", cell(need(ideal, "precision")));
+  set("ideal_recall", cell(need(ideal, "recall")));
+  if (slip.contains("without_edges")) {
+    set("precision_without_edges", cell(need(slip.at("without_edges"), "precision")));
+    set("recall_without_edges", cell(need(slip.at("without_edges"), "recall")));
+  }
+  if (ideal.contains("without_edges")) {
+    set("ideal_precision_without_edges", cell(need(ideal.at("without_edges"), "precision")));
+    set("ideal_recall_without_edges", cell(need(ideal.at("without_edges"), "recall")));
+  }
   set("max_fz_N", cell(need(r, "max_fz_N")));
   set("false_slips", cell(need(slip, "false_positives")));
   set("recompressions", cell(need(r, "recompressions")));
@@ -165,8 +179,9 @@ std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json)
   return {row};
 }
 
-Row failed_row(const Draw& d, int exit_status, const std::string& last_stderr_line) {
-  Row row = drawn_row(d, "paper");
+Row failed_row(const Draw& d, const std::string& method, int exit_status,
+               const std::string& last_stderr_line) {
+  Row row = drawn_row(d, method);
   row.cells[column_index("exit_status")] = fmt::format("{}", exit_status);
   row.cells[column_index("error")] = last_stderr_line;
   return row;
@@ -291,8 +306,10 @@ std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info
     out += fmt::format("\n## Method `{}`: {} scenarios\n\n", method, n);
     out += "| score | n | median | 5th pct | 95th pct |\n|---|---|---|---|---|\n";
     for (const char* score :
-         {"precision", "recall", "ideal_precision", "ideal_recall", "tight_cycle_error",
-          "tight_time_error_s", "max_fz_N", "false_slips", "recompressions", "over_events"}) {
+         {"precision", "recall", "ideal_precision", "ideal_recall", "precision_without_edges",
+          "recall_without_edges", "ideal_precision_without_edges", "ideal_recall_without_edges",
+          "tight_cycle_error", "tight_time_error_s", "max_fz_N", "false_slips", "recompressions",
+          "over_events"}) {
       std::vector<double> v;
       for (const Row* r : mine) {
         const double x = r->number(score);

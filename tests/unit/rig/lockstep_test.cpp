@@ -118,7 +118,16 @@ TEST(Lockstep, ReportHasTheInterfaceKeys) {
             (std::vector<std::string>{
                 "completed", "dropped", "grasp_classified", "release_classified", "recompressions",
                 "twist_cycles", "tightened_cycle", "true_tight_cycle", "max_fz_N", "over_events",
-                "slip", "force_rmse_N", "latency_ms", "lockstep"}));
+                "slip", "force_rmse_N", "latency_ms", "slip_other", "lockstep"}));
+  // Both detectors are scored: the run's under `slip`, the other under `slip_other`.
+  EXPECT_EQ(in_order.at("slip").at("detector"), "paper");
+  EXPECT_EQ(in_order.at("slip_other").at("detector"), "field");
+  for (const char* key : {"slip", "slip_other"}) {
+    const auto& s = in_order.at(key);
+    EXPECT_TRUE(s.at("without_edges").at("precision").is_number()) << key;
+    EXPECT_TRUE(s.at("ideal_sensor").at("without_edges").at("recall").is_number()) << key;
+    EXPECT_TRUE(s.at("edge_frames").is_number_unsigned()) << key;
+  }
 }
 
 // A distributed run's latency is an object of three numbers; a number that is not finite is

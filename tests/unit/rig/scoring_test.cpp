@@ -116,7 +116,7 @@ LockstepResult score_as_lockstep(const std::vector<RecordedFrame>& stream,
     ++frame;
     scorer.add_truth(frame, f.t, f.truth, f.controller, f.pose);
     for (std::size_t i = 0; i < kFingertips; ++i)
-      scorer.add_measurement(i, frame, f.measured[i], f.truth.fingertips[i], f.phase_taken);
+      scorer.add_measurement(i, frame, f.measured[i], f.truth.fingertips[i], f.phase_taken, {});
     for (const control::Event& e : f.events)
       scorer.add_event(e, f.t);
   }
@@ -140,7 +140,7 @@ LockstepResult score_as_realtime(const std::vector<RecordedFrame>& stream,
   const auto deliver = [&](const Arrival& a) {
     const RecordedFrame& f = stream[a.index];
     scorer.add_measurement(a.fingertip, a.index, f.measured[a.fingertip],
-                           f.truth.fingertips[a.fingertip], f.phase_taken);
+                           f.truth.fingertips[a.fingertip], f.phase_taken, {});
     if (++delivered[a.index] == 2) {  // both fingertips of the frame are in: its events follow
       for (const control::Event& e : f.events)
         scorer.add_event(e, f.t + 0.004);
@@ -212,8 +212,8 @@ TEST(Scoring, SeriesFlagsAreTheControllersFlags) {
   right[3].has_displacement = true;
   right[3].fz = 0.5 * cfg.f1_n;  // below F1, but slipping: TOUCH
   right[3].dy_mm = 2 * cfg.dr_mm;
-  scorer.add_measurement(0, 1, left, gt.fingertips[0], control::Phase::kLift);
-  scorer.add_measurement(1, 1, right, gt.fingertips[1], control::Phase::kLift);
+  scorer.add_measurement(0, 1, left, gt.fingertips[0], control::Phase::kLift, {});
+  scorer.add_measurement(1, 1, right, gt.fingertips[1], control::Phase::kLift, {});
   const FrameSample& s = run.series.frames.at(0);
   EXPECT_TRUE(s.touch[0]);
   EXPECT_TRUE(s.over[0]);

@@ -101,8 +101,8 @@ TEST(SweepDraw, AScenarioDependsOnlyOnTheSeedAndItsIndex) {
 
 TEST(SweepTable, CsvReadsBackAsWritten) {
   std::vector<sweep::Row> rows;
-  rows.push_back(sweep::failed_row(sweep::draw_scenario(1, 2), 134, "rig: \"odd\", text"));
-  rows.push_back(sweep::failed_row(sweep::draw_scenario(1, 0), 1, ""));
+  rows.push_back(sweep::failed_row(sweep::draw_scenario(1, 2), "paper", 134, "rig: \"odd\", text"));
+  rows.push_back(sweep::failed_row(sweep::draw_scenario(1, 0), "paper", 1, ""));
   const std::string text = sweep::csv_text(rows);
   const std::vector<sweep::Row> back = sweep::parse_csv(text, "x.csv");
   ASSERT_EQ(back.size(), 2U);
@@ -319,7 +319,7 @@ TEST(SweepPlot, TheSeed20CurveThatHungIsDrawn) {
                                          0.7224489795918367};
   std::vector<sweep::Row> rows;
   for (std::size_t i = 0; i < ideal_recall.size(); ++i) {
-    sweep::Row row = sweep::failed_row(sweep::draw_scenario(20, i), 0, "");
+    sweep::Row row = sweep::failed_row(sweep::draw_scenario(20, i), "paper", 0, "");
     const auto& c = sweep::columns();
     row.cells[static_cast<std::size_t>(std::find(c.begin(), c.end(), "ideal_recall") - c.begin())] =
         fmt::format("{}", ideal_recall[i]);
@@ -362,14 +362,22 @@ TEST(Sweep, SameSeedGivesTheSameTableWhateverTheJobCountAndEachScenarioRerunsAlo
   EXPECT_EQ(csv, read(dir / "three" / "sweep.csv"));
   EXPECT_EQ(read(dir / "one" / "summary.md"), read(dir / "three" / "summary.md"));
   EXPECT_NE(one.out.find("| precision | 3 |"), std::string::npos) << "summary on stdout";
-  EXPECT_NE(one.err.find("3/3 done"), std::string::npos) << "progress on stderr";
+  EXPECT_NE(one.err.find("6/6 runs done"), std::string::npos) << "progress on stderr";
   EXPECT_TRUE(fs::file_size(dir / "one" / "sweep.png") > 1000);
 
-  const std::vector<sweep::Row> rows = sweep::parse_csv(csv, "sweep.csv");
-  ASSERT_EQ(rows.size(), 3U);
+  // One row per scenario and detector, each from its own run.
+  const std::vector<sweep::Row> all = sweep::parse_csv(csv, "sweep.csv");
+  ASSERT_EQ(all.size(), 6U);
+  std::vector<sweep::Row> rows;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    EXPECT_EQ(all[i].at("method"), i % 2 == 0 ? "field" : "paper");
+    EXPECT_EQ(all[i].at("index"), std::to_string(i / 2));
+    EXPECT_FALSE(all[i].at("precision_without_edges").empty());
+    if (all[i].at("method") == "paper") rows.push_back(all[i]);
+  }
+  EXPECT_NE(one.out.find("## Method `field`: 3 scenarios"), std::string::npos) << one.out;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     EXPECT_EQ(rows[i].at("index"), std::to_string(i));
-    EXPECT_EQ(rows[i].at("method"), "paper");
     EXPECT_EQ(rows[i].at("exit_status"), "0");
     EXPECT_EQ(rows[i].at("end_reason"), "max_time");
     EXPECT_EQ(rows[i].number("sim_time_s"), 6);
@@ -380,19 +388,22 @@ TEST(Sweep, SameSeedGivesTheSameTableWhateverTheJobCountAndEachScenarioRerunsAlo
   // Any scenario re-runs alone from its file, to the same report.
   const ProcessResult alone =
       rig({"--lockstep", "--scenario", (dir / "one" / "scenarios" / "00001.yaml").string(),
-           "--report", (dir / "alone.json").string()});
+           "--report", (dir / "alone.json").string(), "--slip-detector", "field"});
   ASSERT_EQ(alone.exit_code, 0) << alone.err;
-  EXPECT_EQ(read(dir / "alone.json"), read(dir / "one" / "reports" / "00001.json"));
+  EXPECT_EQ(read(dir / "alone.json"), read(dir / "one" / "reports" / "00001-field.json"));
+  EXPECT_NE(read(dir / "alone.json").find("\"detector\": \"field\""), std::string::npos);
 }
 
 TEST(Sweep, ThreeShardsMergedEqualOneWholeRun) {
   TempDir dir;
-  const ProcessResult whole = rig(tiny({"--out", (dir / "whole").string(), "--jobs", "2"}));
+  const ProcessResult whole =
+      rig(tiny({"--out", (dir / "whole").string(), "--jobs", "2", "--detectors", "paper"}));
   ASSERT_EQ(whole.exit_code, 0) << whole.err;
   std::vector<std::string> merge{"--sweep-merge"};
   for (int k = 1; k <= 3; ++k) {
     const std::string out = (dir / ("shard" + std::to_string(k))).string();
-    const ProcessResult r = rig(tiny({"--out", out, "--shard", std::to_string(k) + "/3"}));
+    const ProcessResult r =
+        rig(tiny({"--out", out, "--shard", std::to_string(k) + "/3", "--detectors", "paper"}));
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_EQ(sweep::parse_csv(read(fs::path(out) / "sweep.csv"), out).size(), 1U);
     merge.push_back(out);
@@ -411,8 +422,9 @@ TEST(Sweep, ThreeShardsMergedEqualOneWholeRun) {
   EXPECT_EQ(twice.exit_code, 1);
   EXPECT_NE(twice.err.find("scenario 0 (method paper) is in"), std::string::npos) << twice.err;
   // A shard of another sweep is refused too.
-  const ProcessResult other = rig({"--sweep", "3", "--seed", "12", "--max-sim-time", "3", "--shard",
-                                   "2/3", "--out", (dir / "other").string()});
+  const ProcessResult other =
+      rig({"--sweep", "3", "--seed", "12", "--max-sim-time", "3", "--shard", "2/3", "--out",
+           (dir / "other").string(), "--detectors", "paper"});
   ASSERT_EQ(other.exit_code, 0) << other.err;
   const ProcessResult mixed = rig({"--sweep-merge", (dir / "shard1").string(),
                                    (dir / "other").string(), "--out", (dir / "m3").string()});
@@ -439,6 +451,7 @@ TEST(Sweep, AFailingRigProcessIsARowWithItsStatusAndLastLine) {
   o.out = dir / "out";
   o.jobs = 2;
   o.max_sim_time_s = 1;
+  o.detectors = {"paper"};
   o.child_program = child.string();
   EXPECT_EQ(sweep::run_sweep(o), 3U);
   const std::vector<sweep::Row> rows =
@@ -460,6 +473,7 @@ TEST(Sweep, AProgramThatCannotStartIsARowPerScenario) {
   sweep::SweepOptions o;
   o.scenarios = 2;
   o.out = dir / "out";
+  o.detectors = {"paper"};
   o.child_program = (dir / "no-such-rig").string();
   EXPECT_EQ(sweep::run_sweep(o), 2U);
   for (const sweep::Row& row : sweep::parse_csv(read(dir / "out" / "sweep.csv"), "sweep.csv")) {
@@ -471,13 +485,14 @@ TEST(Sweep, AProgramThatCannotStartIsARowPerScenario) {
 TEST(Sweep, SigintStopsTheChildrenAndWritesWhatIsDone) {
   TempDir dir;
   tactile::testing::Process p({kRig, "--sweep", "6", "--seed", "11", "--max-sim-time", "6",
-                               "--jobs", "1", "--out", (dir / "out").string()});
+                               "--jobs", "1", "--out", (dir / "out").string(), "--detectors",
+                               "paper"});
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (p.err_so_far().find("1/6 done") == std::string::npos &&
+  while (p.err_so_far().find("1/6 runs done") == std::string::npos &&
          std::chrono::steady_clock::now() < deadline && p.running()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  ASSERT_NE(p.err_so_far().find("1/6 done"), std::string::npos) << p.err_so_far();
+  ASSERT_NE(p.err_so_far().find("1/6 runs done"), std::string::npos) << p.err_so_far();
   p.signal(SIGINT);
   const ProcessResult r = p.wait(std::chrono::seconds(30));
   ASSERT_FALSE(r.timed_out);
@@ -501,6 +516,10 @@ TEST(Sweep, UsageErrorsExit2) {
            {"--sweep", "3", "--out", (dir / "x").string(), "--shard", "1-3"},
            {"--sweep", "0", "--out", (dir / "x").string()},
            {"--lockstep"},  // no --scenario
+           {"--sweep", "3", "--out", (dir / "x").string(), "--detectors", "paper,wavelet"},
+           {"--sweep", "3", "--out", (dir / "x").string(), "--detectors", "paper,paper"},
+           {"--sweep", "3", "--out", (dir / "x").string(), "--slip-detector", "field"},
+           {"--lockstep", "--scenario", "no-such.yaml", "--slip-detector", "best"},
        }) {
     const ProcessResult r = rig(args);
     EXPECT_EQ(r.exit_code, 2) << args[0] << " " << r.err;

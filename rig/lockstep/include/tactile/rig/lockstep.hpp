@@ -17,6 +17,7 @@
 namespace tactile::rig {
 
 struct SlipMetrics {
+  std::string detector = "paper";  // control::to_string(SlipDetectorKind)
   double precision = 0;
   double recall = 0;
   double latency_frames_p50 = 0;
@@ -31,6 +32,15 @@ struct SlipMetrics {
   // centroiding error. What the detection principle itself reaches against this truth.
   double ideal_precision = 0;
   double ideal_recall = 0;
+  // The same scores without the element-frames at the truth's three edges, where the label
+  // itself is undecided: within one frame of a visibility change, a load ratio of 0.07-0.13,
+  // or a motion (the larger of the tip's slip and the surface's motion) of 0.67-1.5 times the
+  // threshold.
+  double precision_clear = 0;
+  double recall_clear = 0;
+  double ideal_precision_clear = 0;
+  double ideal_recall_clear = 0;
+  std::uint64_t edge_frames = 0;  // element-frames at an edge, truly sliding or not
 };
 
 // Latency given to an onset that no SLIP covered within its episode and two frames after.
@@ -46,9 +56,10 @@ double nearest_rank_percentile(std::vector<double> v, double q);
 class SlipScorer {
  public:
   // One element of one fingertip in frame `frame` (frames counted from the start): `predicted`
-  // is the measurement's slip test, `threshold_mm` the threshold it used.
+  // is the detector's decision on the measured frame, `ideal` its decision on the truth's own
+  // readings (an ideal sensor), `threshold_mm` the slip threshold of the moment.
   void add(std::size_t fingertip, std::size_t element, std::uint64_t frame, bool predicted,
-           const ElementTruth& truth, double threshold_mm);
+           bool ideal, const ElementTruth& truth, double threshold_mm);
   // Closes the onsets still waiting (never covered) and fills the metrics. Call once, at the end.
   void finish(SlipMetrics& out);
 
@@ -58,17 +69,21 @@ class SlipScorer {
     bool pending = false;  // an onset not covered yet
     std::uint64_t onset = 0;
     std::uint64_t last_true = 0;
-    // The true shear displacement of the last frame, for the ideal sensor's test.
     bool was_visible = false;
-    double ux_mm = 0;
-    double uy_mm = 0;
+    bool visibility_changed = false;  // in the last frame
+  };
+  struct Counts {
+    std::uint64_t tp = 0, fp = 0, fn = 0;
+    void add(bool predicted, bool truth) {
+      tp += predicted && truth ? 1 : 0;
+      fp += predicted && !truth ? 1 : 0;
+      fn += !predicted && truth ? 1 : 0;
+    }
   };
   std::array<std::array<Element, kElementsPerFingertip>, kFingertips> elements_{};
   std::vector<double> latencies_;
   SlipMetrics m_;
-  std::uint64_t ideal_tp_ = 0;
-  std::uint64_t ideal_fp_ = 0;
-  std::uint64_t ideal_fn_ = 0;
+  Counts ideal_, clear_, ideal_clear_;
 };
 
 // The scenario report: the fixed keys plus a few of our own (docs/rig.md).
@@ -83,7 +98,8 @@ struct Report {
   std::optional<int> true_tight_cycle;
   double max_fz_N = 0;
   int over_events = 0;
-  SlipMetrics slip;
+  SlipMetrics slip;        // the detector the controller ran
+  SlipMetrics slip_other;  // the other detector on the same frames (it decided nothing)
   double force_rmse_normal_N = 0;
   double force_rmse_shear_N = 0;
   // Distributed runs only: camera timestamp -> ArmCommand received by the arm controller (ms).
@@ -161,6 +177,7 @@ struct Mismatch {
   bool measured_slip = false;
   double measured_d_mm = 0;  // |(dx, dy)| measured
   double measured_fz = 0;
+  std::uint8_t reasons = 0;  // the run's detector's control::kSlip* bits
   ElementTruth truth;
 };
 

@@ -14,6 +14,7 @@
 
 #include "tactile/control/config.hpp"
 #include "tactile/control/flag_analyzer.hpp"
+#include "tactile/control/slip_detector.hpp"
 #include "tactile/control/types.hpp"
 #include "tactile/reading.hpp"
 #include "tactile/rig/lockstep.hpp"
@@ -56,10 +57,13 @@ class RunScorer {
   void add_truth(std::uint64_t frame, double t, const GroundTruth& truth,
                  const ControllerState& controller, const FramePose& pose);
   // One measured frame of one fingertip with the truth of the same frame (add_truth first).
-  // `phase` is the controller's phase the frame was taken in: it sets the slip threshold.
+  // `phase` is the controller's phase the frame was taken in: it sets the slip threshold; `arm`
+  // the arm's motion the controller saw with it (control::ArmMotionEstimator on the reported
+  // wrist pose). Both slip detectors decide on it, and on the truth's own readings (the ideal
+  // sensor); the configured one is the run's `slip`, the other `slip_other`.
   void add_measurement(std::size_t fingertip, std::uint64_t frame,
                        std::span<const ElementReading> measured, const FingertipTruth& truth,
-                       control::Phase phase);
+                       control::Phase phase, const control::ArmMotion& arm);
   void add_event(const control::Event& event, double t);
   // Closes the metrics.
   void finish(bool dropped, double sim_time_s, std::uint64_t frames);
@@ -71,7 +75,18 @@ class RunScorer {
   LockstepResult& run_;
   control::FlagAnalyzer flags_;
   bool record_;
-  SlipScorer slip_;
+  // [0]: the run's detector (the controller's), [1]: the other; each on the measured frames and
+  // on the ideal sensor's readings.
+  std::array<control::SlipDetector, 2> measured_;
+  std::array<control::SlipDetector, 2> ideal_;
+  std::array<SlipScorer, 2> slip_;
+  // The ideal sensor's readings: the truth's forces and per-frame shear displacement.
+  struct IdealTip {
+    std::array<ElementReading, kElementsPerFingertip> readings{};
+    std::array<bool, kElementsPerFingertip> was_visible{};
+    std::array<double, kElementsPerFingertip> ux_mm{}, uy_mm{};
+  };
+  std::array<IdealTip, kFingertips> ideal_tips_{};
   // Per fingertip, summed in fingertip order at the end: the real-time rig gets the two
   // fingertips' frames in either order, and a sum's rounding must not depend on it.
   std::array<double, kFingertips> sq_normal_{};
@@ -83,7 +98,7 @@ class RunScorer {
   struct Latest {
     std::array<ElementReading, kElementsPerFingertip> readings{};
     std::array<bool, kElementsPerFingertip> true_sliding{};
-    double threshold_mm = 0;
+    std::array<bool, kElementsPerFingertip> slip{};  // the run's detector
   };
   std::array<Latest, kFingertips> latest_{};
 };

@@ -28,6 +28,8 @@ struct Scenario {
   // Controller settings the scenario overrides (names as in the `controller` section; the
   // lockstep runner maps them onto the control core's Config).
   std::vector<std::pair<std::string, double>> controller;
+  // controller.slip_detector (paper, field); empty: the control core's default.
+  std::string slip_detector;
 
   // Physics steps per camera frame and the step that makes them fit exactly.
   int steps_per_frame() const;

@@ -69,13 +69,14 @@ struct Row {
   double number(const std::string& column) const;
 };
 
-// The rows of one scenario's run, one per decision method the report scores (today one, the
-// paper's rule: method "paper"), from the report's JSON text. Throws std::runtime_error for a
-// report that is not JSON or lacks a key.
+// The row of one scenario's run: its method is the slip detector the controller ran (the report's
+// `slip.detector`; "paper" for a report without it), from the report's JSON text. Throws
+// std::runtime_error for a report that is not JSON or lacks a key.
 std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json);
-// The row of a scenario whose rig process failed: its exit status (128 + signal when killed) and
-// the last line it wrote on standard error.
-Row failed_row(const Draw& d, int exit_status, const std::string& last_stderr_line);
+// The row of a scenario whose rig process (run with detector `method`) failed: its exit status
+// (128 + signal when killed) and the last line it wrote on standard error.
+Row failed_row(const Draw& d, const std::string& method, int exit_status,
+               const std::string& last_stderr_line);
 
 // The CSV text: a header line, then the rows (sorted by index, then method).
 std::string csv_text(std::vector<Row> rows);
@@ -111,6 +112,9 @@ struct SweepOptions {
   int shard = 1;
   int shards = 1;
   double max_sim_time_s = 0;
+  // Each scenario runs once per slip detector named here (control::to_string names), with
+  // `--slip-detector NAME`: one row per scenario and detector.
+  std::vector<std::string> detectors{"paper", "field"};
   // The program run per scenario as PROGRAM --lockstep --scenario FILE --report FILE; empty: this
   // rig (/proc/self/exe).
   std::string child_program;
