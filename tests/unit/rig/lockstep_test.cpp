@@ -60,6 +60,7 @@ TEST(Lockstep, ReportHasTheInterfaceKeys) {
   rep.grasp_classified = "grasp";
   rep.tightened_cycle = 3;
   rep.slip.true_positives = 7;
+  rep.slip_other.detector = "field";
   rep.seed = 5;
   rep.end_reason = "done";
   const nlohmann::json j = nlohmann::json::parse(report_json(rep));
