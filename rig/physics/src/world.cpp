@@ -255,12 +255,38 @@ void World::release_to(Element& e, double force_n) const noexcept {
   e.ft_n = {shear_force(e.s_mm[0]), shear_force(e.s_mm[1])};
 }
 
-void World::contact_forces(Vec3& force, double& torque, double dt) noexcept {
+World::BaseMotion World::base_motion(double dt) const noexcept {
+  BaseMotion b;
+  b.wrist = wrist_actual();
+  b.vibration_velocity = {0, 0,
+                          p_.arm.vibration_m * arm_.vibration_envelope * 2.0 * kPi *
+                              p_.arm.vibration_hz *
+                              std::cos(2.0 * kPi * p_.arm.vibration_hz * (t_ + dt))};
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    const Fingertip& t = tips_[i];
+    const FingertipAxes& ax = kAxesInWrist[i];
+    b.finger_velocity[i] = rotate_yaw(
+        t.velocity_f.x * ax.x + t.velocity_f.y * ax.y + t.velocity_f.z * ax.z, arm_.yaw_rad);
+  }
+  return b;
+}
+
+Vec3 World::relative_velocity(const BaseMotion& b, std::size_t i, Vec3 pe) const noexcept {
+  const Vec3 z{0, 0, 1};
+  const Vec3 v_surface = cap_.velocity_mps + cap_.yaw_rate_rps * cross(z, pe - cap_.position_m);
+  const Vec3 v_base = arm_.velocity_mps + b.vibration_velocity +
+                      arm_.yaw_rate_rps * cross(z, pe - b.wrist) + b.finger_velocity[i];
+  return v_surface - v_base;
+}
+
+void World::contact_forces(const BaseMotion& b, Vec3& force, double& torque, double dt) noexcept {
   const double rc = p_.cap.radius_m;
   const double half_h = p_.cap.height_m / 2.0;
   const double kn = p_.fingertip.normal_stiffness_npm;
+  const double ct = p_.fingertip.tangential_damping_nspm;
   const Vec3 c = cap_.position_m;
-  for (Fingertip& t : tips_) {
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    Fingertip& t = tips_[i];
     for (Element& e : t.elements) {
       const Vec3 pe = t.apex_world + e.tip_f.x * t.x_f + e.tip_f.y * t.y_f + e.tip_f.z * t.z_f;
       const double dx = pe.x - c.x;
@@ -280,6 +306,7 @@ void World::contact_forces(Vec3& force, double& torque, double dt) noexcept {
         e.sliding = false;
         continue;
       }
+      const bool sticking = e.contact && !e.sliding;
       const double rate = e.contact ? (depth - e.indentation_m) : 0.0;
       e.contact = true;
       e.indentation_m = depth;
@@ -288,31 +315,34 @@ void World::contact_forces(Vec3& force, double& torque, double dt) noexcept {
       const Vec3 inward{-dx / d, -dy / d, 0.0};
       Vec3 f = fn_total * inward;
       f = f - e.ft_n[0] * t.x_f - e.ft_n[1] * t.y_f;
+      // The rubber of a sticking feeler is viscoelastic: it also resists the rate of its
+      // deflection, c_t ds/dt. Without it the cap rings on the feelers' springs after every
+      // change of load, undamped, and the heavier the cap the larger the ringing. Spring and
+      // damper together stay inside the friction cone; past it the tip breaks loose
+      // (update_tangential).
+      if (sticking && ct > 0) {
+        const Vec3 v_rel = relative_velocity(b, i, pe);
+        const double fx = ct * dot(v_rel, t.x_f);
+        const double fy = ct * dot(v_rel, t.y_f);
+        const double room =
+            std::max(0.0, p_.cap.friction * e.fn_n - std::hypot(e.ft_n[0], e.ft_n[1]));
+        const double damping = std::hypot(fx, fy);
+        const double scale = damping > room ? room / damping : 1.0;
+        f = f - (scale * fx) * t.x_f - (scale * fy) * t.y_f;
+      }
       force = force + f;
       torque += dx * f.y - dy * f.x;
     }
   }
 }
 
-void World::update_tangential(double dt) noexcept {
-  const Vec3 c = cap_.position_m;
-  const Vec3 wrist = wrist_actual();
-  const Vec3 vib_v{0, 0,
-                   p_.arm.vibration_m * arm_.vibration_envelope * 2.0 * kPi * p_.arm.vibration_hz *
-                       std::cos(2.0 * kPi * p_.arm.vibration_hz * (t_ + dt))};
-  const Vec3 z{0, 0, 1};
+void World::update_tangential(const BaseMotion& b, double dt) noexcept {
   for (std::size_t i = 0; i < kFingertips; ++i) {
     Fingertip& t = tips_[i];
-    const FingertipAxes& ax = kAxesInWrist[i];
-    const Vec3 v_finger = rotate_yaw(
-        t.velocity_f.x * ax.x + t.velocity_f.y * ax.y + t.velocity_f.z * ax.z, arm_.yaw_rad);
     for (Element& e : t.elements) {
       if (!e.contact) continue;
       const Vec3 pe = t.apex_world + e.tip_f.x * t.x_f + e.tip_f.y * t.y_f + e.tip_f.z * t.z_f;
-      const Vec3 v_surface = cap_.velocity_mps + cap_.yaw_rate_rps * cross(z, pe - c);
-      const Vec3 v_base =
-          arm_.velocity_mps + vib_v + arm_.yaw_rate_rps * cross(z, pe - wrist) + v_finger;
-      const Vec3 v_rel = v_surface - v_base;
+      const Vec3 v_rel = relative_velocity(b, i, pe);
       const double ds_x = dot(v_rel, t.x_f) * dt * kMmPerM;
       const double ds_y = dot(v_rel, t.y_f) * dt * kMmPerM;
       e.frame_surface_mm[0] += ds_x;
@@ -472,16 +502,17 @@ bool World::step(double dt) noexcept {
   update_fingers(dt);
   place_fingertips();
 
+  const BaseMotion base = base_motion(dt);
   Vec3 force{0, 0, -p_.cap.mass_kg * p_.gravity_mps2};
   double torque = 0;
-  contact_forces(force, torque, dt);
+  contact_forces(base, force, torque, dt);
   const double m = p_.cap.mass_kg;
   const double inertia = p_.cap.inertia_factor * m * p_.cap.radius_m * p_.cap.radius_m;
   const Supports supports = support_forces(force, inertia);
   torque += supports.thread_torque;
   integrate_cap(force, torque, supports, inertia, dt);
 
-  update_tangential(dt);
+  update_tangential(base, dt);
   update_cap_place();
   t_ += dt;
 

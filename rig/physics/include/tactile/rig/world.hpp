@@ -201,9 +201,19 @@ class World {
   void update_arm(double dt) noexcept;
   void update_fingers(double dt) noexcept;
   void place_fingertips() noexcept;
-  void contact_forces(Vec3& force, double& torque, double dt) noexcept;
+  // The motion of the feelers' bases this step: the wrist with its vibration, and each
+  // fingertip's own velocity (world frame).
+  struct BaseMotion {
+    Vec3 wrist;
+    Vec3 vibration_velocity;
+    std::array<Vec3, kFingertips> finger_velocity{};
+  };
+  BaseMotion base_motion(double dt) const noexcept;
+  // Velocity of the cap's surface at `pe` relative to the base of fingertip i's feeler there.
+  Vec3 relative_velocity(const BaseMotion& b, std::size_t i, Vec3 pe) const noexcept;
+  void contact_forces(const BaseMotion& b, Vec3& force, double& torque, double dt) noexcept;
   void update_cap_place() noexcept;
-  void update_tangential(double dt) noexcept;
+  void update_tangential(const BaseMotion& b, double dt) noexcept;
   // What the table and the bottle neck add to the cap this step.
   struct Supports {
     double table_n = 0;  // normal force of the table (for its friction)
