@@ -258,7 +258,7 @@ std::string report_json(const Report& r) {
     latency_ms = {
         {"p50", r.latency_ms->p50}, {"p99", r.latency_ms->p99}, {"max", r.latency_ms->max}};
   }
-  const ordered_json report = {
+  ordered_json report = {
       {"completed", r.completed},
       {"dropped", r.dropped},
       {"grasp_classified", optional(r.grasp_classified)},
@@ -281,6 +281,9 @@ std::string report_json(const Report& r) {
         {"normal_full_scale_N", r.normal_full_scale_N},
         {"end_reason", r.end_reason}}},
   };
+  // Added after the keys above, which keep their bytes.
+  report["tight_time_error_s"] = optional(r.tight_time_error_s);
+  report["tight_error_deg"] = optional(r.tight_error_deg);
   // Non-finite numbers are written as null; text that is not UTF-8 is replaced, not thrown on.
   return report.dump(2, ' ', false, ordered_json::error_handler_t::replace) + "\n";
 }

@@ -106,6 +106,7 @@ const std::vector<std::string>& columns() {
                                           "true_tight_cycle",
                                           "tight_cycle_error",
                                           "tight_time_error_s",
+                                          "tight_error_deg",
                                           "precision",
                                           "recall",
                                           "ideal_precision",
@@ -151,8 +152,9 @@ std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json)
     set("tight_cycle_error",
         fmt::format("{}", tightened.get<std::int64_t>() - true_tight.get<std::int64_t>()));
   }
-  // Seconds from the cap meeting its stop to "tight", once the report gives it.
-  if (r.contains("tight_time_error_s")) set("tight_time_error_s", cell(r.at("tight_time_error_s")));
+  // Seconds from the cap meeting its stop to "tight", and the wrist's turn between them.
+  set("tight_time_error_s", cell(need(r, "tight_time_error_s")));
+  set("tight_error_deg", cell(need(r, "tight_error_deg")));
   const json& slip = need(r, "slip");
   set("precision", cell(need(slip, "precision")));
   set("recall", cell(need(slip, "recall")));
@@ -290,9 +292,9 @@ std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info
     };
     out += fmt::format("\n## Method `{}`: {} scenarios\n\n", method, n);
     out += "| score | n | median | 5th pct | 95th pct |\n|---|---|---|---|---|\n";
-    for (const char* score :
-         {"precision", "recall", "ideal_precision", "ideal_recall", "tight_cycle_error",
-          "tight_time_error_s", "max_fz_N", "false_slips", "recompressions", "over_events"}) {
+    for (const char* score : {"precision", "recall", "ideal_precision", "ideal_recall",
+                              "tight_cycle_error", "tight_time_error_s", "tight_error_deg",
+                              "max_fz_N", "false_slips", "recompressions", "over_events"}) {
       std::vector<double> v;
       for (const Row* r : mine) {
         const double x = r->number(score);

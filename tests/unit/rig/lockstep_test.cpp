@@ -28,6 +28,13 @@ TEST(Lockstep, DefaultScenarioTellsThePapersStory) {
   EXPECT_EQ(*rep.tightened_cycle, 3);
   EXPECT_EQ(rep.over_events, 0);
   EXPECT_NEAR(rep.final_cap_angle_deg, 240.0, 1.0);
+  // "Tight" a few frames after the cap met its stop (0.03 s at 100 fps), the wrist turned on
+  // by under a degree (0.25 rad/s).
+  ASSERT_TRUE(rep.tight_time_error_s && rep.tight_error_deg);
+  EXPECT_GE(*rep.tight_time_error_s, 0.0);
+  EXPECT_LE(*rep.tight_time_error_s, 0.5);
+  EXPECT_GE(*rep.tight_error_deg, 0.0);
+  EXPECT_LE(*rep.tight_error_deg, 1.0);
   EXPECT_GE(rep.slip.precision, 0.95);
   EXPECT_GE(rep.slip.recall, 0.95);
   EXPECT_LE(rep.slip.latency_frames_p99, 2.0);
@@ -114,11 +121,19 @@ TEST(Lockstep, ReportHasTheInterfaceKeys) {
   std::vector<std::string> keys;
   for (const auto& [key, value] : in_order.items())
     keys.push_back(key);
-  EXPECT_EQ(keys,
-            (std::vector<std::string>{
-                "completed", "dropped", "grasp_classified", "release_classified", "recompressions",
-                "twist_cycles", "tightened_cycle", "true_tight_cycle", "max_fz_N", "over_events",
-                "slip", "force_rmse_N", "latency_ms", "lockstep"}));
+  EXPECT_EQ(keys, (std::vector<std::string>{"completed", "dropped", "grasp_classified",
+                                            "release_classified", "recompressions", "twist_cycles",
+                                            "tightened_cycle", "true_tight_cycle", "max_fz_N",
+                                            "over_events", "slip", "force_rmse_N", "latency_ms",
+                                            "lockstep", "tight_time_error_s", "tight_error_deg"}));
+  // Null when either instant is missing; numbers when both are there.
+  EXPECT_TRUE(j.at("tight_time_error_s").is_null());
+  EXPECT_TRUE(j.at("tight_error_deg").is_null());
+  rep.tight_time_error_s = 0.25;
+  rep.tight_error_deg = 12.5;
+  const nlohmann::json k = nlohmann::json::parse(report_json(rep));
+  EXPECT_EQ(k.at("tight_time_error_s"), 0.25);
+  EXPECT_EQ(k.at("tight_error_deg"), 12.5);
 }
 
 // A distributed run's latency is an object of three numbers; a number that is not finite is

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "process.hpp"
+#include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/scenario.hpp"
 #include "tactile/util/files.hpp"
 
@@ -111,6 +112,28 @@ TEST(SweepTable, CsvReadsBackAsWritten) {
   EXPECT_EQ(back[1].number("exit_status"), 134);
   EXPECT_EQ(sweep::csv_text(back), text);
   EXPECT_THROW(sweep::parse_csv("index,method\n1,paper\n", "bad.csv"), std::runtime_error);
+}
+
+// The report's tightness timing fills its columns; null is an empty cell.
+TEST(SweepTable, TightnessTimingComesFromTheReport) {
+  tactile::rig::Report rep;
+  rep.tightened_cycle = 4;
+  rep.true_tight_cycle = 3;
+  rep.tight_time_error_s = 1.25;
+  rep.tight_error_deg = 31.5;
+  const sweep::Draw d = sweep::draw_scenario(1, 0);
+  const sweep::Row row = sweep::rows_from_report(d, tactile::rig::report_json(rep)).at(0);
+  EXPECT_EQ(row.number("tight_cycle_error"), 1);
+  EXPECT_EQ(row.number("tight_time_error_s"), 1.25);
+  EXPECT_EQ(row.number("tight_error_deg"), 31.5);
+  rep.tight_time_error_s.reset();
+  rep.tight_error_deg.reset();
+  const sweep::Row none = sweep::rows_from_report(d, tactile::rig::report_json(rep)).at(0);
+  EXPECT_EQ(none.at("tight_time_error_s"), "");
+  EXPECT_EQ(none.at("tight_error_deg"), "");
+  const std::string summary = sweep::summary_markdown({row, none}, {});
+  EXPECT_NE(summary.find("| tight_time_error_s | 1 | 1.25 |"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("| tight_error_deg | 1 | 31.5 |"), std::string::npos) << summary;
 }
 
 // The ideal-sensor recall of the 200 scenarios of seed 20 (docs/slip.md): drawn dashed, their

@@ -93,6 +93,12 @@ struct Report {
     double max = 0;
   };
   std::optional<Latency> latency_ms;
+  // Tightness timing (docs/rig.md): "tight" declared (the controller's CAP_TIGHT) minus the cap
+  // meeting its stop in the truth (the first frame with cap_tight), in seconds, and the wrist's
+  // turn in the tightening direction between the two instants (the over-tightening), in degrees.
+  // Null when either is missing.
+  std::optional<double> tight_time_error_s;
+  std::optional<double> tight_error_deg;
   // Ours.
   std::uint64_t seed = 0;
   double sim_time_s = 0;
