@@ -86,10 +86,27 @@ void SlipScorer::finish(SlipMetrics& out) {
   out = m_;
 }
 
+const char* scenario_case(const WorldParams& w) {
+  if (w.cap.held_to_table) return "cap_held";
+  if (w.bottle.displaced_x_m != 0 || w.bottle.displaced_y_m != 0) return "bottle_displaced";
+  return "normal";
+}
+
+void judge_negative_case(Report& r) {
+  if (r.scenario_case == "bottle_displaced") {
+    r.negative_case_passed = !r.release_classified && !r.opened_in_air;
+  } else if (r.scenario_case == "cap_held") {
+    r.negative_case_passed = r.grasp_classified != "grasp";
+  } else {
+    r.negative_case_passed.reset();
+  }
+}
+
 LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   LockstepResult result;
   Report& rep = result.report;
   rep.seed = sc.seed;
+  rep.scenario_case = scenario_case(sc.world);
 
   const control::Config cfg = scenario_controller_config(sc);
   World world(sc.world);
@@ -178,6 +195,9 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
     for (const control::Event& e : out.events)
       scorer.add_event(e, t);
 
+    // A drop by command: the fingers told to open with nothing under the cap.
+    if (out.command.kind == control::CommandKind::kOpen && world.cap().place == CapPlace::kFree)
+      rep.opened_in_air = true;
     world.apply(to_world_command(out.command));
     phase = out.phase;
     if (gt.dropped && dropped_at < 0) dropped_at = t;
@@ -195,6 +215,7 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   }
 
   scorer.finish(world.cap().dropped, static_cast<double>(frame) / sc.camera.fps, frame);
+  judge_negative_case(rep);
   return result;
 }
 
@@ -284,6 +305,9 @@ std::string report_json(const Report& r) {
   // Added after the keys above, which keep their bytes.
   report["tight_time_error_s"] = optional(r.tight_time_error_s);
   report["tight_error_deg"] = optional(r.tight_error_deg);
+  report["case"] = r.scenario_case;
+  report["negative_case_passed"] = optional(r.negative_case_passed);
+  report["opened_in_air"] = r.opened_in_air;
   // Non-finite numbers are written as null; text that is not UTF-8 is replaced, not thrown on.
   return report.dump(2, ' ', false, ordered_json::error_handler_t::replace) + "\n";
 }

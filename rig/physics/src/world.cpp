@@ -338,7 +338,7 @@ void World::update_tangential(double dt) noexcept {
 void World::update_cap_place() noexcept {
   const double bottom = cap_.position_m.z - p_.cap.height_m / 2.0;
   const double off_axis =
-      std::hypot(cap_.position_m.x - p_.bottle.x_m, cap_.position_m.y - p_.bottle.y_m);
+      std::hypot(cap_.position_m.x - bottle_x_m(), cap_.position_m.y - bottle_y_m());
   bool any_contact = false;
   for (const Fingertip& t : tips_)
     for (const Element& e : t.elements)
@@ -373,7 +373,7 @@ void World::update_cap_place() noexcept {
 // Supports: the table top, and the bottle neck under a cap that meets it.
 World::Supports World::support_forces(Vec3& force, double inertia) const noexcept {
   const double bottom = cap_.position_m.z - p_.cap.height_m / 2.0;
-  const Vec3 to_axis{p_.bottle.x_m - cap_.position_m.x, p_.bottle.y_m - cap_.position_m.y, 0};
+  const Vec3 to_axis{bottle_x_m() - cap_.position_m.x, bottle_y_m() - cap_.position_m.y, 0};
   const double off_axis = std::hypot(to_axis.x, to_axis.y);
   Supports s;
   if (bottom < 0) {
@@ -381,6 +381,14 @@ World::Supports World::support_forces(Vec3& force, double inertia) const noexcep
         0.0, -p_.table_stiffness_npm * bottom - p_.table_damping_nspm * cap_.velocity_mps.z);
     force.z += s.table_n;
     s.friction_torque_max = p_.cap.table_friction * s.table_n * (2.0 / 3.0) * p_.cap.radius_m;
+  }
+  if (p_.cap.held_to_table) {
+    // The anchor: back to the resting place horizontally, down onto the table when pulled up.
+    const double k = p_.table_stiffness_npm;
+    const double c = p_.table_damping_nspm;
+    force.x += -k * (cap_.position_m.x - p_.cap.x_m) - c * cap_.velocity_mps.x;
+    force.y += -k * (cap_.position_m.y - p_.cap.y_m) - c * cap_.velocity_mps.y;
+    if (bottom > 0) force.z += -k * bottom - c * cap_.velocity_mps.z;
   }
   const bool on_neck = cap_.place == CapPlace::kOnBottle || cap_.place == CapPlace::kThreaded ||
                        (off_axis < p_.cap.radius_m && bottom < p_.bottle.height_m &&

@@ -31,6 +31,7 @@ Row drawn_row(const Draw& d, const std::string& method) {
   };
   set("index", fmt::format("{}", d.index));
   set("method", method);
+  set("case", to_string(d.scenario_case));
   set("scenario_seed", fmt::format("{}", d.scenario_seed));
   set("mass_kg", fmt::format("{}", d.mass_kg));
   set("radius_mm", fmt::format("{}", d.radius_mm));
@@ -79,11 +80,42 @@ std::string number_text(double v) {
   return std::isfinite(v) ? fmt::format("{:.4g}", v) : std::string("-");
 }
 
+// The classifications per case (docs/slip.md, "Negative cases"): the target is a grasp and a
+// release in every normal scenario and no classification in a negative one; the negative
+// scenarios that failed are listed by index.
+std::string case_table(const std::vector<const Row*>& rows) {
+  std::string out =
+      "\n| case | scenarios | grasp on the lift | release at the bottle | opened in the air | "
+      "negative case passed |\n|---|---|---|---|---|---|\n";
+  std::string failed;
+  for (const Case c : {Case::kNormal, Case::kBottleDisplaced, Case::kCapHeld}) {
+    const std::string name = to_string(c);
+    std::size_t n = 0, grasp = 0, release = 0, opened = 0, passed = 0;
+    std::vector<std::string> failing;
+    for (const Row* r : rows) {
+      if (r->at("case") != name) continue;
+      ++n;
+      grasp += r->at("grasp_classified") == "grasp" ? 1 : 0;
+      release += r->at("release_classified") == "release" ? 1 : 0;
+      opened += r->at("opened_in_air") == "true" ? 1 : 0;
+      passed += r->at("negative_case_passed") == "true" ? 1 : 0;
+      if (c != Case::kNormal && r->at("negative_case_passed") != "true")
+        failing.push_back(r->at("index"));
+    }
+    out += fmt::format("| {} | {} | {} | {} | {} | {} |\n", name, n, grasp, release, opened,
+                       c == Case::kNormal ? std::string("-") : fmt::format("{} of {}", passed, n));
+    if (!failing.empty())
+      failed += fmt::format("\n{} failed (index): {}\n", name, fmt::join(failing, ", "));
+  }
+  return out + failed;
+}
+
 }  // namespace
 
 const std::vector<std::string>& columns() {
   static const std::vector<std::string> c{"index",
                                           "method",
+                                          "case",
                                           "scenario_seed",
                                           "mass_kg",
                                           "radius_mm",
@@ -102,6 +134,8 @@ const std::vector<std::string>& columns() {
                                           "over_events",
                                           "grasp_classified",
                                           "release_classified",
+                                          "negative_case_passed",
+                                          "opened_in_air",
                                           "tightened_cycle",
                                           "true_tight_cycle",
                                           "tight_cycle_error",
@@ -144,6 +178,12 @@ std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json)
   set("over_events", cell(need(r, "over_events")));
   set("grasp_classified", cell(need(r, "grasp_classified")));
   set("release_classified", cell(need(r, "release_classified")));
+  if (cell(need(r, "case")) != to_string(d.scenario_case)) {
+    throw std::runtime_error("the report's case is " + need(r, "case").dump() + ", the draw's " +
+                             to_string(d.scenario_case));
+  }
+  set("negative_case_passed", cell(need(r, "negative_case_passed")));
+  set("opened_in_air", cell(need(r, "opened_in_air")));
   const json& tightened = need(r, "tightened_cycle");
   const json& true_tight = need(r, "true_tight_cycle");
   set("tightened_cycle", cell(tightened));
@@ -328,6 +368,7 @@ std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info
     out +=
         fmt::format("| tight in the true cycle | {} |\n",
                     share(count([](const Row* r) { return r->number("tight_cycle_error") == 0; })));
+    out += case_table(mine);
   }
   return out;
 }

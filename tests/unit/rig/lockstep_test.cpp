@@ -49,6 +49,63 @@ TEST(Lockstep, DefaultScenarioTellsThePapersStory) {
   EXPECT_FALSE(r.series.snapshots.empty());
 }
 
+// The sweep's negative cases (docs/slip.md, "Negative cases") on the default scenario. The
+// bottle displaced 100 mm: the cap lowered over the controller's place meets nothing above the
+// lowering's limit (0.09 m, above the table), so no release may be classified and the fingers
+// may not open; the report says which happened.
+TEST(Lockstep, DisplacedBottleNoReleaseAndTheReportSaysSo) {
+  Scenario s = load_scenario(kDir / "default.yaml");
+  s.world.bottle.displaced_x_m = 0.1;
+  s.controller.emplace_back("lower_limit_m", 0.09);
+  LockstepOptions o;
+  o.record_series = false;
+  const Report rep = run_lockstep(s, o).report;
+  EXPECT_EQ(rep.scenario_case, "bottle_displaced");
+  EXPECT_EQ(rep.grasp_classified, std::optional<std::string>("grasp"));
+  EXPECT_EQ(rep.release_classified, std::nullopt);
+  EXPECT_FALSE(rep.opened_in_air);
+  EXPECT_FALSE(rep.dropped);
+  EXPECT_EQ(rep.negative_case_passed, std::optional<bool>(true));
+  EXPECT_EQ(rep.end_reason, "aborted: lowered to lower_limit_m without a negative slip");
+  const nlohmann::json j = nlohmann::json::parse(report_json(rep));
+  EXPECT_EQ(j.at("case"), "bottle_displaced");
+  EXPECT_EQ(j.at("negative_case_passed"), true);
+  EXPECT_EQ(j.at("opened_in_air"), false);
+}
+
+// The cap held to the table: the lift must not classify a grasp. The paper's rule sees the cap
+// slide down the fingertips as the weight's pull and says "grasp"; the report judges whichever
+// answer the run gave (run through the lift only).
+TEST(Lockstep, HeldCapIsJudgedOnTheLift) {
+  Scenario s = load_scenario(kDir / "default.yaml");
+  s.world.cap.held_to_table = true;
+  s.max_time_s = 12.0;
+  LockstepOptions o;
+  o.record_series = false;
+  const Report rep = run_lockstep(s, o).report;
+  EXPECT_EQ(rep.scenario_case, "cap_held");
+  EXPECT_FALSE(rep.dropped) << "the cap never left the table";
+  ASSERT_TRUE(rep.negative_case_passed.has_value());
+  EXPECT_EQ(*rep.negative_case_passed, rep.grasp_classified != "grasp");
+  // The rule on its own: a grasp fails, a release or nothing passes.
+  Report judged;
+  judged.scenario_case = "cap_held";
+  for (const auto& [grasp, passed] : std::vector<std::pair<std::optional<std::string>, bool>>{
+           {"grasp", false}, {"release", true}, {std::nullopt, true}}) {
+    judged.grasp_classified = grasp;
+    judge_negative_case(judged);
+    EXPECT_EQ(judged.negative_case_passed, std::optional<bool>(passed));
+  }
+  judged.scenario_case = "bottle_displaced";
+  judged.release_classified.reset();
+  judged.opened_in_air = true;
+  judge_negative_case(judged);
+  EXPECT_EQ(judged.negative_case_passed, std::optional<bool>(false)) << "fingers opened";
+  judged.scenario_case = "normal";
+  judge_negative_case(judged);
+  EXPECT_EQ(judged.negative_case_passed, std::nullopt);
+}
+
 TEST(Lockstep, SameSeedSameReportBytes) {
   Scenario s = load_scenario(kDir / "default.yaml");
   s.max_time_s = 8.0;  // through the grasp, the lift and its slip classification
@@ -64,7 +121,7 @@ TEST(Lockstep, SameSeedSameReportBytes) {
 // INTERFACES.md section 4: every key, with its JSON type; ours beside them.
 TEST(Lockstep, ReportHasTheInterfaceKeys) {
   Report rep;
-  rep.grasp_classified = "grasp";
+  rep.grasp_classified.emplace("grasp");
   rep.tightened_cycle = 3;
   rep.slip.true_positives = 7;
   rep.seed = 5;
@@ -121,11 +178,15 @@ TEST(Lockstep, ReportHasTheInterfaceKeys) {
   std::vector<std::string> keys;
   for (const auto& [key, value] : in_order.items())
     keys.push_back(key);
-  EXPECT_EQ(keys, (std::vector<std::string>{"completed", "dropped", "grasp_classified",
-                                            "release_classified", "recompressions", "twist_cycles",
-                                            "tightened_cycle", "true_tight_cycle", "max_fz_N",
-                                            "over_events", "slip", "force_rmse_N", "latency_ms",
-                                            "lockstep", "tight_time_error_s", "tight_error_deg"}));
+  EXPECT_EQ(keys,
+            (std::vector<std::string>{
+                "completed", "dropped", "grasp_classified", "release_classified", "recompressions",
+                "twist_cycles", "tightened_cycle", "true_tight_cycle", "max_fz_N", "over_events",
+                "slip", "force_rmse_N", "latency_ms", "lockstep", "tight_time_error_s",
+                "tight_error_deg", "case", "negative_case_passed", "opened_in_air"}));
+  EXPECT_EQ(j.at("case"), "normal");
+  EXPECT_TRUE(j.at("negative_case_passed").is_null());
+  EXPECT_EQ(j.at("opened_in_air"), false);
   // Null when either instant is missing; numbers when both are there.
   EXPECT_TRUE(j.at("tight_time_error_s").is_null());
   EXPECT_TRUE(j.at("tight_error_deg").is_null());

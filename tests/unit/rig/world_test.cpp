@@ -152,6 +152,34 @@ TEST(World, FirmGraspHoldsTheCapWithoutSlip) {
   EXPECT_GE(in_contact, 5);  // a patch of elements, like Fig. 3
 }
 
+// The sweep's held cap (docs/slip.md, "Negative cases"): a grip at F2 = 2 N per element, many
+// times the cap's weight, lifts the fingertips off it; the cap stays on the table.
+TEST(World, ACapHeldToTheTableStaysThereUnderAFullGrip) {
+  WorldParams p;
+  p.cap.held_to_table = true;
+  const World w = grasp_and_lift(p, 1e-4, 2.0);
+  EXPECT_FALSE(w.cap().lifted);
+  EXPECT_FALSE(w.cap().dropped);
+  EXPECT_EQ(w.cap().place, CapPlace::kOnTable);
+  EXPECT_NEAR(w.cap().position_m.z, p.cap.height_m / 2, 1e-4);
+  EXPECT_NEAR(w.cap().position_m.x, p.cap.x_m, 1e-4);
+  EXPECT_NEAR(w.cap().position_m.y, p.cap.y_m, 1e-4);
+  // Without the hold, the same grip lifts it.
+  p.cap.held_to_table = false;
+  EXPECT_TRUE(grasp_and_lift(p, 1e-4, 2.0).cap().lifted);
+}
+
+// The sweep's displaced bottle: the world's neck stands where the displacement puts it, not at
+// (x_m, y_m), the place the controller is given (Lockstep.DisplacedBottle... runs the task).
+TEST(World, ADisplacedBottleStandsAwayFromTheGivenPlace) {
+  WorldParams p;
+  p.bottle.displaced_x_m = 0.1;
+  p.bottle.displaced_y_m = -0.02;
+  const World w(p);
+  EXPECT_DOUBLE_EQ(w.bottle_x_m(), p.bottle.x_m + 0.1);
+  EXPECT_DOUBLE_EQ(w.bottle_y_m(), p.bottle.y_m - 0.02);
+}
+
 TEST(World, IncipientSlipAtLightlyPressedElementsBeforeGrossSlip) {
   // A heavy cap: the lift first breaks the lightly pressed rim elements loose
   // (incipient slip), and only later every element (gross slip: the cap stays behind).
