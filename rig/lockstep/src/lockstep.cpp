@@ -109,6 +109,7 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   rep.scenario_case = scenario_case(sc.world);
 
   const control::Config cfg = scenario_controller_config(sc);
+  rep.hold = hold_need(sc.world, cfg.f2_n);
   World world(sc.world);
   const int steps =
       opt.dt_s > 0 ? std::max(1, static_cast<int>(std::lround(1.0 / (sc.camera.fps * opt.dt_s))))
@@ -308,6 +309,10 @@ std::string report_json(const Report& r) {
   report["case"] = r.scenario_case;
   report["negative_case_passed"] = optional(r.negative_case_passed);
   report["opened_in_air"] = r.opened_in_air;
+  report["holdable"] = r.hold.holdable;
+  report["hold"] = {{"peak_accel_mps2", r.hold.peak_accel_mps2},
+                    {"grip_needed_N", r.hold.grip_needed_n},
+                    {"grip_allowed_N", r.hold.grip_allowed_n}};
   // Non-finite numbers are written as null; text that is not UTF-8 is replaced, not thrown on.
   return report.dump(2, ' ', false, ordered_json::error_handler_t::replace) + "\n";
 }

@@ -103,6 +103,31 @@ std::array<Vec3, kElementsPerFingertip> World::element_normals() const {
   return out;
 }
 
+HoldNeed hold_need(const WorldParams& p, double f2_n) {
+  HoldNeed h;
+  const ArmParams& arm = p.arm;
+  const double w = 2.0 * kPi * arm.vibration_hz;
+  h.peak_accel_mps2 = arm.max_accel_mps2 + w * w * arm.vibration_m;
+  h.grip_needed_n = p.cap.mass_kg * (p.gravity_mps2 + h.peak_accel_mps2) / (2.0 * p.cap.friction);
+  // The apex pressed in by F2 / k_n; each element's depth as contact_forces() takes it, with the
+  // patch centred on the cap's height: along the squeeze its tip lies r_d (1 - cos theta) behind
+  // the apex, across it r_d sin(theta) cos(phi), upward r_d sin(theta) sin(phi).
+  const double kn = p.fingertip.normal_stiffness_npm;
+  const double rc = p.cap.radius_m;
+  const double half_h = p.cap.height_m / 2.0;
+  const double apex_from_axis = rc - f2_n / kn;
+  const World world(p);
+  for (const Element& e : world.fingertip(0).elements) {
+    const double across = e.tip_f.x;
+    const double up = e.tip_f.y;
+    const double depth_edge = std::clamp((half_h + 0.0005 - std::abs(up)) / 0.0005, 0.0, 1.0);
+    const double depth = (rc - std::hypot(apex_from_axis - e.tip_f.z, across)) * depth_edge;
+    if (depth > 0) h.grip_allowed_n += kn * depth;
+  }
+  h.holdable = h.grip_needed_n <= h.grip_allowed_n;
+  return h;
+}
+
 bool World::apply(const ArmCommand& c) noexcept {
   if (!finite(c.target_position_m) || !std::isfinite(c.target_yaw_rad) ||
       !std::isfinite(c.max_speed_mps) || !std::isfinite(c.max_yaw_rate_rps) ||

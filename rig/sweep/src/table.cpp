@@ -110,6 +110,35 @@ std::string case_table(const std::vector<const Row*>& rows) {
   return out + failed;
 }
 
+// Completion, drops and OVER of the normal scenarios apart for those the hand can hold within F2
+// and those it cannot (docs/slip.md, "Holdable within F2"); the latter listed by index.
+std::string hold_table(const std::vector<const Row*>& rows) {
+  std::string out =
+      "\n| normal scenarios | scenarios | completed | dropped | OVER raised "
+      "|\n|---|---|---|---|---|\n";
+  std::vector<std::string> not_holdable;
+  for (const bool holdable : {true, false}) {
+    std::size_t n = 0, completed = 0, dropped = 0, over = 0;
+    for (const Row* r : rows) {
+      if (r->at("holdable") == (holdable ? "true" : "false")) {
+        if (!holdable) not_holdable.push_back(r->at("index"));
+        if (r->at("case") != "normal") continue;
+        ++n;
+        completed += r->at("completed") == "true" ? 1 : 0;
+        dropped += r->at("dropped") == "true" ? 1 : 0;
+        over += r->number("over_events") > 0 ? 1 : 0;
+      }
+    }
+    out += fmt::format("| {} | {} | {} | {} | {} |\n",
+                       holdable ? "holdable within F2" : "not holdable within F2", n, completed,
+                       dropped, over);
+  }
+  out += fmt::format("\nNot holdable within F2 (index, any case): {}\n",
+                     not_holdable.empty() ? std::string("none")
+                                          : fmt::format("{}", fmt::join(not_holdable, ", ")));
+  return out;
+}
+
 }  // namespace
 
 const std::vector<std::string>& columns() {
@@ -136,6 +165,9 @@ const std::vector<std::string>& columns() {
                                           "release_classified",
                                           "negative_case_passed",
                                           "opened_in_air",
+                                          "holdable",
+                                          "grip_needed_N",
+                                          "grip_allowed_N",
                                           "tightened_cycle",
                                           "true_tight_cycle",
                                           "tight_cycle_error",
@@ -184,6 +216,9 @@ std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json)
   }
   set("negative_case_passed", cell(need(r, "negative_case_passed")));
   set("opened_in_air", cell(need(r, "opened_in_air")));
+  set("holdable", cell(need(r, "holdable")));
+  set("grip_needed_N", cell(need(need(r, "hold"), "grip_needed_N")));
+  set("grip_allowed_N", cell(need(need(r, "hold"), "grip_allowed_N")));
   const json& tightened = need(r, "tightened_cycle");
   const json& true_tight = need(r, "true_tight_cycle");
   set("tightened_cycle", cell(tightened));
@@ -369,6 +404,7 @@ std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info
         fmt::format("| tight in the true cycle | {} |\n",
                     share(count([](const Row* r) { return r->number("tight_cycle_error") == 0; })));
     out += case_table(mine);
+    out += hold_table(mine);
   }
   return out;
 }

@@ -28,6 +28,9 @@ TEST(Lockstep, DefaultScenarioTellsThePapersStory) {
   EXPECT_EQ(*rep.tightened_cycle, 3);
   EXPECT_EQ(rep.over_events, 0);
   EXPECT_NEAR(rep.final_cap_angle_deg, 240.0, 1.0);
+  // 20 g at mu_s 0.8: a fraction of a newton per fingertip, F2 allows tens.
+  EXPECT_TRUE(rep.hold.holdable);
+  EXPECT_NEAR(rep.hold.grip_needed_n, 0.020 * (9.81 + rep.hold.peak_accel_mps2) / 1.6, 1e-12);
   // "Tight" a few frames after the cap met its stop (0.03 s at 100 fps), the wrist turned on
   // by under a degree (0.25 rad/s).
   ASSERT_TRUE(rep.tight_time_error_s && rep.tight_error_deg);
@@ -178,15 +181,33 @@ TEST(Lockstep, ReportHasTheInterfaceKeys) {
   std::vector<std::string> keys;
   for (const auto& [key, value] : in_order.items())
     keys.push_back(key);
-  EXPECT_EQ(keys,
-            (std::vector<std::string>{
-                "completed", "dropped", "grasp_classified", "release_classified", "recompressions",
-                "twist_cycles", "tightened_cycle", "true_tight_cycle", "max_fz_N", "over_events",
-                "slip", "force_rmse_N", "latency_ms", "lockstep", "tight_time_error_s",
-                "tight_error_deg", "case", "negative_case_passed", "opened_in_air"}));
+  EXPECT_EQ(keys, (std::vector<std::string>{"completed",
+                                            "dropped",
+                                            "grasp_classified",
+                                            "release_classified",
+                                            "recompressions",
+                                            "twist_cycles",
+                                            "tightened_cycle",
+                                            "true_tight_cycle",
+                                            "max_fz_N",
+                                            "over_events",
+                                            "slip",
+                                            "force_rmse_N",
+                                            "latency_ms",
+                                            "lockstep",
+                                            "tight_time_error_s",
+                                            "tight_error_deg",
+                                            "case",
+                                            "negative_case_passed",
+                                            "opened_in_air",
+                                            "holdable",
+                                            "hold"}));
   EXPECT_EQ(j.at("case"), "normal");
   EXPECT_TRUE(j.at("negative_case_passed").is_null());
   EXPECT_EQ(j.at("opened_in_air"), false);
+  EXPECT_TRUE(j.at("holdable").is_boolean());
+  for (const char* key : {"peak_accel_mps2", "grip_needed_N", "grip_allowed_N"})
+    EXPECT_TRUE(j.at("hold").at(key).is_number()) << key;
   // Null when either instant is missing; numbers when both are there.
   EXPECT_TRUE(j.at("tight_time_error_s").is_null());
   EXPECT_TRUE(j.at("tight_error_deg").is_null());

@@ -225,6 +225,47 @@ TEST(SweepTable, NegativeCasesAreCountedPerCaseAndTheFailedListed) {
             sweep::csv_text(rows));
 }
 
+// Holdable within F2 from the report; the summary counts completion, drops and OVER of the normal
+// scenarios apart for the holdable and the others, and lists the others by index.
+TEST(SweepTable, HoldableAndNotHoldableAreCountedApart) {
+  std::vector<sweep::Row> rows;
+  std::vector<std::string> normal;
+  for (std::uint64_t i = 0; i < 10; ++i) {
+    const sweep::Draw d = sweep::draw_scenario(3, i);
+    tactile::rig::Report rep;
+    rep.scenario_case = sweep::to_string(d.scenario_case);
+    tactile::rig::judge_negative_case(rep);
+    rep.hold.grip_needed_n = 0.5;
+    rep.hold.grip_allowed_n = i < 7 ? 40.0 : 0.4;
+    rep.hold.holdable = i < 7;
+    rep.completed = i < 7 && d.scenario_case == sweep::Case::kNormal;
+    rep.dropped = i >= 7;
+    rep.over_events = i == 0 ? 1 : 0;
+    const sweep::Row row = sweep::rows_from_report(d, tactile::rig::report_json(rep)).at(0);
+    EXPECT_EQ(row.at("holdable"), i < 7 ? "true" : "false");
+    EXPECT_EQ(row.number("grip_needed_N"), 0.5);
+    EXPECT_EQ(row.number("grip_allowed_N"), rep.hold.grip_allowed_n);
+    if (d.scenario_case == sweep::Case::kNormal) normal.push_back(row.at("index"));
+    rows.push_back(row);
+  }
+  std::size_t normal_holdable = 0;
+  for (const std::string& i : normal)
+    normal_holdable += std::stoi(i) < 7 ? 1 : 0;
+  const std::size_t normal_not = normal.size() - normal_holdable;
+  const std::string summary = sweep::summary_markdown(rows, {});
+  EXPECT_NE(summary.find(fmt::format(
+                "| holdable within F2 | {} | {} | 0 | {} |", normal_holdable, normal_holdable,
+                std::find(normal.begin(), normal.end(), "0") != normal.end() ? 1 : 0)),
+            std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find(fmt::format("| not holdable within F2 | {} | 0 | {} | 0 |", normal_not,
+                                     normal_not)),
+            std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("Not holdable within F2 (index, any case): 7, 8, 9"), std::string::npos)
+      << summary;
+}
+
 // The ideal-sensor recall of the 200 scenarios of seed 20 (docs/slip.md): drawn dashed, their
 // sorted curve once carried a dash phase a rounding error short of a dash's end, and the plot
 // advanced by nothing for ever (fixed in common/plot). The plot must be written.

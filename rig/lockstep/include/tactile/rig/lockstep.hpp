@@ -107,6 +107,8 @@ struct Report {
   std::string scenario_case = "normal";
   std::optional<bool> negative_case_passed;
   bool opened_in_air = false;
+  // Whether the hand can hold this cap within F2 (truth: weight, peak acceleration, mu_s).
+  HoldNeed hold;
   // Ours.
   std::uint64_t seed = 0;
   double sim_time_s = 0;

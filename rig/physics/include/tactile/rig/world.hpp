@@ -177,6 +177,22 @@ struct ArmState {
   bool stopped = false;
 };
 
+// Whether the hand can hold the cap within F2, from the world's parameters alone (docs/rig.md,
+// "Holding within F2"): the grip each fingertip needs to carry the cap's weight and its peak
+// acceleration on friction, against the grip it can press with no element beyond F2.
+struct HoldNeed {
+  // The wrist's acceleration bound (arm.max_accel_mps2) plus the vibration's peak,
+  // (2 pi f)^2 A, both taken along gravity.
+  double peak_accel_mps2 = 0;
+  // Per fingertip: m (g + peak_accel) / (2 mu_s).
+  double grip_needed_n = 0;
+  // Per fingertip: the sum of the elements' normal forces on the cap when the most pressed one
+  // (the apex) carries F2, from the dome's element layout against the cap's cylinder.
+  double grip_allowed_n = 0;
+  bool holdable = false;  // grip_needed_n <= grip_allowed_n
+};
+HoldNeed hold_need(const WorldParams& p, double f2_n);
+
 // The world. Construction allocates; step() and apply() allocate nothing and never throw.
 class World {
  public:
