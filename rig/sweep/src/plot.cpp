@@ -85,9 +85,9 @@ void write_plot(const std::vector<Row>& rows, const SweepInfo& info,
     }
     tight.bars(ex, ey, 0.3, method, solid);
     tight_s.histogram(finite_values(mine, "tight_time_error_s"), 30,
-                      plot::RobustRange{0.0, 1.0, 0.1}, method, solid);
+                      plot::RobustRange{0.0, 0.95, 0.1}, method, solid);
     tight_deg.histogram(finite_values(mine, "tight_error_deg"), 30,
-                        plot::RobustRange{0.0, 1.0, 0.1}, method, solid);
+                        plot::RobustRange{0.0, 0.95, 0.1}, method, solid);
 
     const auto count = [&](auto pred) {
       return static_cast<double>(std::count_if(mine.begin(), mine.end(), pred));
