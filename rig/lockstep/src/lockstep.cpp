@@ -98,12 +98,30 @@ void SlipScorer::finish(SlipMetrics& out) {
   out.detector = detector;
 }
 
+const char* scenario_case(const WorldParams& w) {
+  if (w.cap.held_to_table) return "cap_held";
+  if (w.bottle.displaced_x_m != 0 || w.bottle.displaced_y_m != 0) return "bottle_displaced";
+  return "normal";
+}
+
+void judge_negative_case(Report& r) {
+  if (r.scenario_case == "bottle_displaced") {
+    r.negative_case_passed = !r.release_classified && !r.opened_in_air;
+  } else if (r.scenario_case == "cap_held") {
+    r.negative_case_passed = r.grasp_classified != "grasp";
+  } else {
+    r.negative_case_passed.reset();
+  }
+}
+
 LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   LockstepResult result;
   Report& rep = result.report;
   rep.seed = sc.seed;
+  rep.scenario_case = scenario_case(sc.world);
 
   const control::Config cfg = scenario_controller_config(sc);
+  rep.hold = hold_need(sc.world, cfg.f2_n);
   World world(sc.world);
   const int steps =
       opt.dt_s > 0 ? std::max(1, static_cast<int>(std::lround(1.0 / (sc.camera.fps * opt.dt_s))))
@@ -193,6 +211,9 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
     for (const control::Event& e : out.events)
       scorer.add_event(e, t);
 
+    // A drop by command: the fingers told to open with nothing under the cap.
+    if (out.command.kind == control::CommandKind::kOpen && world.cap().place == CapPlace::kFree)
+      rep.opened_in_air = true;
     world.apply(to_world_command(out.command));
     phase = out.phase;
     if (gt.dropped && dropped_at < 0) dropped_at = t;
@@ -210,6 +231,7 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   }
 
   scorer.finish(world.cap().dropped, static_cast<double>(frame) / sc.camera.fps, frame);
+  judge_negative_case(rep);
   return result;
 }
 
@@ -282,7 +304,7 @@ std::string report_json(const Report& r) {
     latency_ms = {
         {"p50", r.latency_ms->p50}, {"p99", r.latency_ms->p99}, {"max", r.latency_ms->max}};
   }
-  const ordered_json report = {
+  ordered_json report = {
       {"completed", r.completed},
       {"dropped", r.dropped},
       {"grasp_classified", optional(r.grasp_classified)},
@@ -306,6 +328,16 @@ std::string report_json(const Report& r) {
         {"normal_full_scale_N", r.normal_full_scale_N},
         {"end_reason", r.end_reason}}},
   };
+  // Added after the keys above, which keep their bytes.
+  report["tight_time_error_s"] = optional(r.tight_time_error_s);
+  report["tight_error_deg"] = optional(r.tight_error_deg);
+  report["case"] = r.scenario_case;
+  report["negative_case_passed"] = optional(r.negative_case_passed);
+  report["opened_in_air"] = r.opened_in_air;
+  report["holdable"] = r.hold.holdable;
+  report["hold"] = {{"peak_accel_mps2", r.hold.peak_accel_mps2},
+                    {"grip_needed_N", r.hold.grip_needed_n},
+                    {"grip_allowed_N", r.hold.grip_allowed_n}};
   // Non-finite numbers are written as null; text that is not UTF-8 is replaced, not thrown on.
   return report.dump(2, ' ', false, ordered_json::error_handler_t::replace) + "\n";
 }

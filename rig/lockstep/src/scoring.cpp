@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 namespace tactile::rig {
@@ -38,6 +39,7 @@ control::SlipDetectorKind other(control::SlipDetectorKind k) {
 RunScorer::RunScorer(LockstepResult& run, const control::Config& cfg, bool record_series)
     : run_(run),
       flags_(cfg),
+      tighten_yaw_sign_(cfg.tighten_clockwise ? -1.0 : 1.0),
       record_(record_series),
       measured_{control::SlipDetector(cfg.slip_detector, cfg),
                 control::SlipDetector(other(cfg.slip_detector), cfg)},
@@ -61,10 +63,18 @@ FrameSample* RunScorer::sample_for(std::uint64_t frame) {
 void RunScorer::add_truth(std::uint64_t frame, double t, const GroundTruth& gt,
                           const ControllerState& controller, const FramePose& pose) {
   Report& rep = run_.report;
+  if (have_wrist_yaw_) {
+    const double turn =
+        tighten_yaw_sign_ * (pose.wrist_yaw_rad - last_wrist_yaw_rad_) * 180.0 / std::numbers::pi;
+    wrist_turn_deg_ += std::max(turn, 0.0);
+  }
+  have_wrist_yaw_ = true;
+  last_wrist_yaw_rad_ = pose.wrist_yaw_rad;
   // True tightening: the controller's cycle when the cap angle first passed free_turn_deg.
   if (gt.cap_tight && !rep.true_tight_cycle) {
     rep.true_tight_cycle = static_cast<int>(controller.twist_cycle);
   }
+  if (gt.cap_tight && !cap_stop_) cap_stop_ = Moment{t, wrist_turn_deg_};
   rep.twist_cycles = std::max(rep.twist_cycles, static_cast<int>(controller.twist_cycle));
   rep.final_cap_angle_deg = gt.cap_angle_deg;
   if (!record_) return;
@@ -244,6 +254,7 @@ void RunScorer::add_event(const control::Event& e, double t) {
       break;
     case control::EventKind::kCapTight:
       if (!rep.tightened_cycle) rep.tightened_cycle = static_cast<int>(e.cycle);
+      if (!declared_tight_) declared_tight_ = Moment{t, wrist_turn_deg_};
       label = "cap tight";
       break;
     case control::EventKind::kDone:
@@ -274,6 +285,10 @@ void RunScorer::finish(bool dropped, double sim_time_s, std::uint64_t frames) {
   Report& rep = run_.report;
   slip_[0].finish(rep.slip);
   slip_[1].finish(rep.slip_other);
+  if (cap_stop_ && declared_tight_) {
+    rep.tight_time_error_s = declared_tight_->t - cap_stop_->t;
+    rep.tight_error_deg = declared_tight_->wrist_turn_deg - cap_stop_->wrist_turn_deg;
+  }
   rep.dropped = dropped;
   rep.frames = frames;
   rep.sim_time_s = sim_time_s;

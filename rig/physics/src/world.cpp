@@ -103,6 +103,31 @@ std::array<Vec3, kElementsPerFingertip> World::element_normals() const {
   return out;
 }
 
+HoldNeed hold_need(const WorldParams& p, double f2_n) {
+  HoldNeed h;
+  const ArmParams& arm = p.arm;
+  const double w = 2.0 * kPi * arm.vibration_hz;
+  h.peak_accel_mps2 = arm.max_accel_mps2 + w * w * arm.vibration_m;
+  h.grip_needed_n = p.cap.mass_kg * (p.gravity_mps2 + h.peak_accel_mps2) / (2.0 * p.cap.friction);
+  // The apex pressed in by F2 / k_n; each element's depth as contact_forces() takes it, with the
+  // patch centred on the cap's height: along the squeeze its tip lies r_d (1 - cos theta) behind
+  // the apex, across it r_d sin(theta) cos(phi), upward r_d sin(theta) sin(phi).
+  const double kn = p.fingertip.normal_stiffness_npm;
+  const double rc = p.cap.radius_m;
+  const double half_h = p.cap.height_m / 2.0;
+  const double apex_from_axis = rc - f2_n / kn;
+  const World world(p);
+  for (const Element& e : world.fingertip(0).elements) {
+    const double across = e.tip_f.x;
+    const double up = e.tip_f.y;
+    const double depth_edge = std::clamp((half_h + 0.0005 - std::abs(up)) / 0.0005, 0.0, 1.0);
+    const double depth = (rc - std::hypot(apex_from_axis - e.tip_f.z, across)) * depth_edge;
+    if (depth > 0) h.grip_allowed_n += kn * depth;
+  }
+  h.holdable = h.grip_needed_n <= h.grip_allowed_n;
+  return h;
+}
+
 bool World::apply(const ArmCommand& c) noexcept {
   if (!finite(c.target_position_m) || !std::isfinite(c.target_yaw_rad) ||
       !std::isfinite(c.max_speed_mps) || !std::isfinite(c.max_yaw_rate_rps) ||
@@ -368,7 +393,7 @@ void World::update_tangential(const BaseMotion& b, double dt) noexcept {
 void World::update_cap_place() noexcept {
   const double bottom = cap_.position_m.z - p_.cap.height_m / 2.0;
   const double off_axis =
-      std::hypot(cap_.position_m.x - p_.bottle.x_m, cap_.position_m.y - p_.bottle.y_m);
+      std::hypot(cap_.position_m.x - bottle_x_m(), cap_.position_m.y - bottle_y_m());
   bool any_contact = false;
   for (const Fingertip& t : tips_)
     for (const Element& e : t.elements)
@@ -403,7 +428,7 @@ void World::update_cap_place() noexcept {
 // Supports: the table top, and the bottle neck under a cap that meets it.
 World::Supports World::support_forces(Vec3& force, double inertia) const noexcept {
   const double bottom = cap_.position_m.z - p_.cap.height_m / 2.0;
-  const Vec3 to_axis{p_.bottle.x_m - cap_.position_m.x, p_.bottle.y_m - cap_.position_m.y, 0};
+  const Vec3 to_axis{bottle_x_m() - cap_.position_m.x, bottle_y_m() - cap_.position_m.y, 0};
   const double off_axis = std::hypot(to_axis.x, to_axis.y);
   Supports s;
   if (bottom < 0) {
@@ -411,6 +436,14 @@ World::Supports World::support_forces(Vec3& force, double inertia) const noexcep
         0.0, -p_.table_stiffness_npm * bottom - p_.table_damping_nspm * cap_.velocity_mps.z);
     force.z += s.table_n;
     s.friction_torque_max = p_.cap.table_friction * s.table_n * (2.0 / 3.0) * p_.cap.radius_m;
+  }
+  if (p_.cap.held_to_table) {
+    // The anchor: back to the resting place horizontally, down onto the table when pulled up.
+    const double k = p_.table_stiffness_npm;
+    const double c = p_.table_damping_nspm;
+    force.x += -k * (cap_.position_m.x - p_.cap.x_m) - c * cap_.velocity_mps.x;
+    force.y += -k * (cap_.position_m.y - p_.cap.y_m) - c * cap_.velocity_mps.y;
+    if (bottom > 0) force.z += -k * bottom - c * cap_.velocity_mps.z;
   }
   const bool on_neck = cap_.place == CapPlace::kOnBottle || cap_.place == CapPlace::kThreaded ||
                        (off_axis < p_.cap.radius_m && bottom < p_.bottle.height_m &&

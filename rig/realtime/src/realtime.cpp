@@ -587,6 +587,9 @@ void RealtimeRun::finish() {
   if (util::stop_requested() && !ended_) rep_.end_reason = "stopped";
   scorer_.finish(world_.cap().dropped, static_cast<double>(util::realtime_ns() - start_ns_) * 1e-9,
                  frame_ - first_frame_);
+  rep_.scenario_case = scenario_case(sc_.world);
+  rep_.hold = hold_need(sc_.world, cfg_.f2_n);
+  judge_negative_case(rep_);
   if (ended_ && rep_.completed) rep_.end_reason = "done";
   if (!latencies_ms_.empty()) {
     result_.latency_samples = latencies_ms_.size();

@@ -119,7 +119,7 @@ void parse_camera(const Node& cam, CameraParams& c) {
 // Required: mass_kg, radius_mm, friction.
 void parse_cap(const Node& cap, CapParams& cp) {
   cap.refuse_unknown_keys({"mass_kg", "radius_mm", "friction", "height_mm", "kinetic_ratio",
-                           "inertia_factor", "x_m", "y_m", "table_friction"});
+                           "inertia_factor", "x_m", "y_m", "table_friction", "held_to_table"});
   cp.mass_kg = need(cap, "mass_kg", 1e-4, 1.0);
   cp.radius_m = need(cap, "radius_mm", 5.0, 50.0) / 1000.0;
   cp.friction = need(cap, "friction", 0.05, 3.0);
@@ -129,13 +129,14 @@ void parse_cap(const Node& cap, CapParams& cp) {
   cp.x_m = want(cap, "x_m", cp.x_m, -2.0, 2.0);
   cp.y_m = want(cap, "y_m", cp.y_m, -2.0, 2.0);
   cp.table_friction = want(cap, "table_friction", cp.table_friction, 0.0, 3.0);
+  cp.held_to_table = cap.get("held_to_table", cp.held_to_table);
 }
 
 // Required: free_turn_deg.
 void parse_bottle(const Node& bottle, BottleParams& bp) {
   bottle.refuse_unknown_keys({"free_turn_deg", "x_m", "y_m", "height_mm", "free_torque_nm",
                               "tight_stiffness_nm_per_rad", "capture_radius_mm",
-                              "tighten_clockwise"});
+                              "tighten_clockwise", "displaced_mm"});
   bp.free_turn_deg = need(bottle, "free_turn_deg", 0.0, 3600.0);
   bp.x_m = want(bottle, "x_m", bp.x_m, -2.0, 2.0);
   bp.y_m = want(bottle, "y_m", bp.y_m, -2.0, 2.0);
@@ -146,6 +147,16 @@ void parse_bottle(const Node& bottle, BottleParams& bp) {
   bp.capture_radius_m =
       want(bottle, "capture_radius_mm", bp.capture_radius_m * 1000.0, 0.1, 20.0) / 1000.0;
   bp.tighten_clockwise = bottle.get("tighten_clockwise", bp.tighten_clockwise);
+  if (auto displaced = bottle.find("displaced_mm")) {
+    const std::vector<double> v = displaced->as_doubles();
+    if (v.size() != 2) displaced->fail("must be [dx, dy] in millimetres");
+    for (const double d : v) {
+      if (!(std::abs(d) <= 1000.0))
+        displaced->fail("must be within [-1000, 1000] mm each, is " + number_text(d));
+    }
+    bp.displaced_x_m = v[0] / 1000.0;
+    bp.displaced_y_m = v[1] / 1000.0;
+  }
 }
 
 // Required: vibration_mm, vibration_hz.

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "tactile/rig/sweep.hpp"
 #include "tactile/util/random.hpp"
@@ -17,7 +18,30 @@ double on_grid(util::Random& rng, Range r, double step) {
   return std::fmin(k, hi) * step;
 }
 
+// Which index of a block of kCaseBlock is displaced and which is held: two different ones, from
+// the block's own generator.
+Case case_of(std::uint64_t sweep_seed, std::uint64_t index) {
+  constexpr std::uint64_t kSalt = 0x6e65676174697665ULL;  // "negative"
+  util::Random rng(util::splitmix64(util::splitmix64(sweep_seed ^ kSalt) ^ (index / kCaseBlock)));
+  const std::uint64_t displaced = rng.below(kCaseBlock);
+  const std::uint64_t held = (displaced + 1 + rng.below(kCaseBlock - 1)) % kCaseBlock;
+  const std::uint64_t at = index % kCaseBlock;
+  return at == displaced ? Case::kBottleDisplaced : at == held ? Case::kCapHeld : Case::kNormal;
+}
+
 }  // namespace
+
+const char* to_string(Case c) {
+  switch (c) {
+    case Case::kNormal:
+      return "normal";
+    case Case::kBottleDisplaced:
+      return "bottle_displaced";
+    case Case::kCapHeld:
+      return "cap_held";
+  }
+  return "?";
+}
 
 Draw draw_scenario(std::uint64_t sweep_seed, std::uint64_t index) {
   // Every value comes from this scenario's own generator, in a fixed order: scenario i is the
@@ -39,6 +63,12 @@ Draw draw_scenario(std::uint64_t sweep_seed, std::uint64_t index) {
   d.noise_sigma = on_grid(rng, {r.noise_sigma.lo * 100, r.noise_sigma.hi * 100}, 1.0) / 100;
   d.fps = static_cast<int>(on_grid(rng, r.fps, 1.0));
   d.bit_depth = rng.below(2) == 0 ? 8 : 16;
+  d.scenario_case = case_of(sweep_seed, index);
+  const double distance = on_grid(rng, kDisplacementMm, 1.0);
+  const double direction = static_cast<double>(rng.below(8)) * std::numbers::pi / 4.0;
+  // On a 0.1 mm grid, so that the file states it exactly.
+  d.displaced_x_mm = std::round(distance * std::cos(direction) * 10.0) / 10.0 + 0.0;
+  d.displaced_y_mm = std::round(distance * std::sin(direction) * 10.0) / 10.0 + 0.0;
   return d;
 }
 
@@ -54,6 +84,17 @@ std::string scenario_yaml(const Draw& d, double max_sim_time_s) {
       "arm: {{vibration_mm: {}, vibration_hz: {}}}\n",
       d.index, d.scenario_seed, d.fps, d.bit_depth, d.noise_sigma, d.mass_kg, d.radius_mm,
       d.friction, d.kinetic_ratio, d.free_turn_deg, d.vibration_mm, d.vibration_hz);
+  if (d.scenario_case == Case::kCapHeld) {
+    y += "# Negative case: the cap is held to the table; no grasp may be classified on the lift.\n";
+    y.replace(y.find("kinetic_ratio: "), 0, "held_to_table: true, ");
+  }
+  if (d.scenario_case == Case::kBottleDisplaced) {
+    y += "# Negative case: the bottle stands away from the controller's place; no release may be\n"
+         "# classified, the fingers may not open. MOVE5 stops above the table (also a support).\n";
+    y.replace(y.find("free_turn_deg: "), 0,
+              fmt::format("displaced_mm: [{}, {}], ", d.displaced_x_mm, d.displaced_y_mm));
+    y += fmt::format("controller: {{lower_limit_m: {}}}\n", kDisplacedLowerLimitM);
+  }
   if (max_sim_time_s > 0) y += fmt::format("sim: {{max_time_s: {}}}\n", max_sim_time_s);
   return y;
 }

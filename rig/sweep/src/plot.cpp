@@ -37,7 +37,7 @@ void write_plot(const std::vector<Row>& rows, const SweepInfo& info,
   for (const Row& r : rows)
     by_method[r.at("method")].push_back(&r);
 
-  plot::Figure fig(1000, 1600);
+  plot::Figure fig(1000, 2100);
   fig.title(fmt::format("sweep: seed {}, {} of {} scenarios", info.seed,
                         by_method.empty() ? 0 : by_method.begin()->second.size(), info.scenarios));
   auto& slip = fig.add_panel(1.4);
@@ -48,6 +48,14 @@ void write_plot(const std::vector<Row>& rows, const SweepInfo& info,
       .y_robust(plot::RobustRange{0.0, 1.0, 0.05});
   auto& tight = fig.add_panel();
   tight.title("tightness error: declared minus true cycle").x_label("cycles").y_label("scenarios");
+  auto& tight_s = fig.add_panel();
+  tight_s.title("tightness error: \"tight\" declared minus the cap meeting its stop")
+      .x_label("seconds")
+      .y_label("scenarios");
+  auto& tight_deg = fig.add_panel();
+  tight_deg.title("over-tightening: wrist turn from the cap meeting its stop to \"tight\"")
+      .x_label("degrees")
+      .y_label("scenarios");
   auto& outcome = fig.add_panel();
   outcome.title("outcomes (rig failed: its process exited non-zero; time limit: max_time)")
       .y_label("scenarios");
@@ -76,6 +84,10 @@ void write_plot(const std::vector<Row>& rows, const SweepInfo& info,
       ey.push_back(k);
     }
     tight.bars(ex, ey, 0.3, method, solid);
+    tight_s.histogram(finite_values(mine, "tight_time_error_s"), 30,
+                      plot::RobustRange{0.0, 0.95, 0.1}, method, solid);
+    tight_deg.histogram(finite_values(mine, "tight_error_deg"), 30,
+                        plot::RobustRange{0.0, 0.95, 0.1}, method, solid);
 
     const auto count = [&](auto pred) {
       return static_cast<double>(std::count_if(mine.begin(), mine.end(), pred));

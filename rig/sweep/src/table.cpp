@@ -31,6 +31,7 @@ Row drawn_row(const Draw& d, const std::string& method) {
   };
   set("index", fmt::format("{}", d.index));
   set("method", method);
+  set("case", to_string(d.scenario_case));
   set("scenario_seed", fmt::format("{}", d.scenario_seed));
   set("mass_kg", fmt::format("{}", d.mass_kg));
   set("radius_mm", fmt::format("{}", d.radius_mm));
@@ -79,11 +80,71 @@ std::string number_text(double v) {
   return std::isfinite(v) ? fmt::format("{:.4g}", v) : std::string("-");
 }
 
+// The classifications per case (docs/slip.md, "Negative cases"): the target is a grasp and a
+// release in every normal scenario and no classification in a negative one; the negative
+// scenarios that failed are listed by index.
+std::string case_table(const std::vector<const Row*>& rows) {
+  std::string out =
+      "\n| case | scenarios | grasp on the lift | release at the bottle | opened in the air | "
+      "negative case passed |\n|---|---|---|---|---|---|\n";
+  std::string failed;
+  for (const Case c : {Case::kNormal, Case::kBottleDisplaced, Case::kCapHeld}) {
+    const std::string name = to_string(c);
+    std::size_t n = 0, grasp = 0, release = 0, opened = 0, passed = 0;
+    std::vector<std::string> failing;
+    for (const Row* r : rows) {
+      if (r->at("case") != name) continue;
+      ++n;
+      grasp += r->at("grasp_classified") == "grasp" ? 1 : 0;
+      release += r->at("release_classified") == "release" ? 1 : 0;
+      opened += r->at("opened_in_air") == "true" ? 1 : 0;
+      passed += r->at("negative_case_passed") == "true" ? 1 : 0;
+      if (c != Case::kNormal && r->at("negative_case_passed") != "true")
+        failing.push_back(r->at("index"));
+    }
+    out += fmt::format("| {} | {} | {} | {} | {} | {} |\n", name, n, grasp, release, opened,
+                       c == Case::kNormal ? std::string("-") : fmt::format("{} of {}", passed, n));
+    if (!failing.empty())
+      failed += fmt::format("\n{} failed (index): {}\n", name, fmt::join(failing, ", "));
+  }
+  return out + failed;
+}
+
+// Completion, drops and OVER of the normal scenarios apart for those the hand can hold within F2
+// and those it cannot (docs/slip.md, "Holdable within F2"); the latter listed by index.
+std::string hold_table(const std::vector<const Row*>& rows) {
+  std::string out =
+      "\n| normal scenarios | scenarios | completed | dropped | OVER raised "
+      "|\n|---|---|---|---|---|\n";
+  std::vector<std::string> not_holdable;
+  for (const bool holdable : {true, false}) {
+    std::size_t n = 0, completed = 0, dropped = 0, over = 0;
+    for (const Row* r : rows) {
+      if (r->at("holdable") == (holdable ? "true" : "false")) {
+        if (!holdable) not_holdable.push_back(r->at("index"));
+        if (r->at("case") != "normal") continue;
+        ++n;
+        completed += r->at("completed") == "true" ? 1 : 0;
+        dropped += r->at("dropped") == "true" ? 1 : 0;
+        over += r->number("over_events") > 0 ? 1 : 0;
+      }
+    }
+    out += fmt::format("| {} | {} | {} | {} | {} |\n",
+                       holdable ? "holdable within F2" : "not holdable within F2", n, completed,
+                       dropped, over);
+  }
+  out += fmt::format("\nNot holdable within F2 (index, any case): {}\n",
+                     not_holdable.empty() ? std::string("none")
+                                          : fmt::format("{}", fmt::join(not_holdable, ", ")));
+  return out;
+}
+
 }  // namespace
 
 const std::vector<std::string>& columns() {
   static const std::vector<std::string> c{"index",
                                           "method",
+                                          "case",
                                           "scenario_seed",
                                           "mass_kg",
                                           "radius_mm",
@@ -102,10 +163,16 @@ const std::vector<std::string>& columns() {
                                           "over_events",
                                           "grasp_classified",
                                           "release_classified",
+                                          "negative_case_passed",
+                                          "opened_in_air",
+                                          "holdable",
+                                          "grip_needed_N",
+                                          "grip_allowed_N",
                                           "tightened_cycle",
                                           "true_tight_cycle",
                                           "tight_cycle_error",
                                           "tight_time_error_s",
+                                          "tight_error_deg",
                                           "precision",
                                           "recall",
                                           "ideal_precision",
@@ -149,6 +216,15 @@ std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json)
   set("over_events", cell(need(r, "over_events")));
   set("grasp_classified", cell(need(r, "grasp_classified")));
   set("release_classified", cell(need(r, "release_classified")));
+  if (cell(need(r, "case")) != to_string(d.scenario_case)) {
+    throw std::runtime_error("the report's case is " + need(r, "case").dump() + ", the draw's " +
+                             to_string(d.scenario_case));
+  }
+  set("negative_case_passed", cell(need(r, "negative_case_passed")));
+  set("opened_in_air", cell(need(r, "opened_in_air")));
+  set("holdable", cell(need(r, "holdable")));
+  set("grip_needed_N", cell(need(need(r, "hold"), "grip_needed_N")));
+  set("grip_allowed_N", cell(need(need(r, "hold"), "grip_allowed_N")));
   const json& tightened = need(r, "tightened_cycle");
   const json& true_tight = need(r, "true_tight_cycle");
   set("tightened_cycle", cell(tightened));
@@ -157,8 +233,9 @@ std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json)
     set("tight_cycle_error",
         fmt::format("{}", tightened.get<std::int64_t>() - true_tight.get<std::int64_t>()));
   }
-  // Seconds from the cap meeting its stop to "tight", once the report gives it.
-  if (r.contains("tight_time_error_s")) set("tight_time_error_s", cell(r.at("tight_time_error_s")));
+  // Seconds from the cap meeting its stop to "tight", and the wrist's turn between them.
+  set("tight_time_error_s", cell(need(r, "tight_time_error_s")));
+  set("tight_error_deg", cell(need(r, "tight_error_deg")));
   set("precision", cell(need(slip, "precision")));
   set("recall", cell(need(slip, "recall")));
   const json& ideal = need(slip, "ideal_sensor");
@@ -308,8 +385,8 @@ std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info
     for (const char* score :
          {"precision", "recall", "ideal_precision", "ideal_recall", "precision_without_edges",
           "recall_without_edges", "ideal_precision_without_edges", "ideal_recall_without_edges",
-          "tight_cycle_error", "tight_time_error_s", "max_fz_N", "false_slips", "recompressions",
-          "over_events"}) {
+          "tight_cycle_error", "tight_time_error_s", "tight_error_deg", "max_fz_N", "false_slips",
+          "recompressions", "over_events"}) {
       std::vector<double> v;
       for (const Row* r : mine) {
         const double x = r->number(score);
@@ -343,6 +420,8 @@ std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info
     out +=
         fmt::format("| tight in the true cycle | {} |\n",
                     share(count([](const Row* r) { return r->number("tight_cycle_error") == 0; })));
+    out += case_table(mine);
+    out += hold_table(mine);
   }
   return out;
 }

@@ -29,6 +29,16 @@ TEST(Lockstep, DefaultScenarioTellsThePapersStory) {
   EXPECT_EQ(*rep.tightened_cycle, 3);
   EXPECT_EQ(rep.over_events, 0);
   EXPECT_NEAR(rep.final_cap_angle_deg, 240.0, 1.0);
+  // 20 g at mu_s 0.8: a fraction of a newton per fingertip, F2 allows tens.
+  EXPECT_TRUE(rep.hold.holdable);
+  EXPECT_NEAR(rep.hold.grip_needed_n, 0.020 * (9.81 + rep.hold.peak_accel_mps2) / 1.6, 1e-12);
+  // "Tight" a few frames after the cap met its stop (0.03 s at 100 fps), the wrist turned on
+  // by under a degree (0.25 rad/s).
+  ASSERT_TRUE(rep.tight_time_error_s && rep.tight_error_deg);
+  EXPECT_GE(*rep.tight_time_error_s, 0.0);
+  EXPECT_LE(*rep.tight_time_error_s, 0.5);
+  EXPECT_GE(*rep.tight_error_deg, 0.0);
+  EXPECT_LE(*rep.tight_error_deg, 1.0);
   EXPECT_GE(rep.slip.precision, 0.95);
   EXPECT_GE(rep.slip.recall, 0.95);
   EXPECT_LE(rep.slip.latency_frames_p99, 2.0);
@@ -64,6 +74,63 @@ TEST(Lockstep, HeavyVibratingCapFromTheSweepCompletes) {
   EXPECT_LT(rep.slip.false_positives, 200U);
 }
 
+// The sweep's negative cases (docs/slip.md, "Negative cases") on the default scenario. The
+// bottle displaced 100 mm: the cap lowered over the controller's place meets nothing above the
+// lowering's limit (0.09 m, above the table), so no release may be classified and the fingers
+// may not open; the report says which happened.
+TEST(Lockstep, DisplacedBottleNoReleaseAndTheReportSaysSo) {
+  Scenario s = load_scenario(kDir / "default.yaml");
+  s.world.bottle.displaced_x_m = 0.1;
+  s.controller.emplace_back("lower_limit_m", 0.09);
+  LockstepOptions o;
+  o.record_series = false;
+  const Report rep = run_lockstep(s, o).report;
+  EXPECT_EQ(rep.scenario_case, "bottle_displaced");
+  EXPECT_EQ(rep.grasp_classified, std::optional<std::string>("grasp"));
+  EXPECT_EQ(rep.release_classified, std::nullopt);
+  EXPECT_FALSE(rep.opened_in_air);
+  EXPECT_FALSE(rep.dropped);
+  EXPECT_EQ(rep.negative_case_passed, std::optional<bool>(true));
+  EXPECT_EQ(rep.end_reason, "aborted: lowered to lower_limit_m without a negative slip");
+  const nlohmann::json j = nlohmann::json::parse(report_json(rep));
+  EXPECT_EQ(j.at("case"), "bottle_displaced");
+  EXPECT_EQ(j.at("negative_case_passed"), true);
+  EXPECT_EQ(j.at("opened_in_air"), false);
+}
+
+// The cap held to the table: the lift must not classify a grasp. The paper's rule sees the cap
+// slide down the fingertips as the weight's pull and says "grasp"; the report judges whichever
+// answer the run gave (run through the lift only).
+TEST(Lockstep, HeldCapIsJudgedOnTheLift) {
+  Scenario s = load_scenario(kDir / "default.yaml");
+  s.world.cap.held_to_table = true;
+  s.max_time_s = 12.0;
+  LockstepOptions o;
+  o.record_series = false;
+  const Report rep = run_lockstep(s, o).report;
+  EXPECT_EQ(rep.scenario_case, "cap_held");
+  EXPECT_FALSE(rep.dropped) << "the cap never left the table";
+  ASSERT_TRUE(rep.negative_case_passed.has_value());
+  EXPECT_EQ(*rep.negative_case_passed, rep.grasp_classified != "grasp");
+  // The rule on its own: a grasp fails, a release or nothing passes.
+  Report judged;
+  judged.scenario_case = "cap_held";
+  for (const auto& [grasp, passed] : std::vector<std::pair<std::optional<std::string>, bool>>{
+           {"grasp", false}, {"release", true}, {std::nullopt, true}}) {
+    judged.grasp_classified = grasp;
+    judge_negative_case(judged);
+    EXPECT_EQ(judged.negative_case_passed, std::optional<bool>(passed));
+  }
+  judged.scenario_case = "bottle_displaced";
+  judged.release_classified.reset();
+  judged.opened_in_air = true;
+  judge_negative_case(judged);
+  EXPECT_EQ(judged.negative_case_passed, std::optional<bool>(false)) << "fingers opened";
+  judged.scenario_case = "normal";
+  judge_negative_case(judged);
+  EXPECT_EQ(judged.negative_case_passed, std::nullopt);
+}
+
 TEST(Lockstep, SameSeedSameReportBytes) {
   Scenario s = load_scenario(kDir / "default.yaml");
   s.max_time_s = 8.0;  // through the grasp, the lift and its slip classification
@@ -79,7 +146,7 @@ TEST(Lockstep, SameSeedSameReportBytes) {
 // INTERFACES.md section 4: every key, with its JSON type; ours beside them.
 TEST(Lockstep, ReportHasTheInterfaceKeys) {
   Report rep;
-  rep.grasp_classified = "grasp";
+  rep.grasp_classified.emplace("grasp");
   rep.tightened_cycle = 3;
   rep.slip.true_positives = 7;
   rep.slip_other.detector = "field";
@@ -137,11 +204,6 @@ TEST(Lockstep, ReportHasTheInterfaceKeys) {
   std::vector<std::string> keys;
   for (const auto& [key, value] : in_order.items())
     keys.push_back(key);
-  EXPECT_EQ(keys,
-            (std::vector<std::string>{
-                "completed", "dropped", "grasp_classified", "release_classified", "recompressions",
-                "twist_cycles", "tightened_cycle", "true_tight_cycle", "max_fz_N", "over_events",
-                "slip", "force_rmse_N", "latency_ms", "slip_other", "lockstep"}));
   // Both detectors are scored: the run's under `slip`, the other under `slip_other`.
   EXPECT_EQ(in_order.at("slip").at("detector"), "paper");
   EXPECT_EQ(in_order.at("slip_other").at("detector"), "field");
@@ -151,6 +213,42 @@ TEST(Lockstep, ReportHasTheInterfaceKeys) {
     EXPECT_TRUE(s.at("ideal_sensor").at("without_edges").at("recall").is_number()) << key;
     EXPECT_TRUE(s.at("edge_frames").is_number_unsigned()) << key;
   }
+  EXPECT_EQ(keys, (std::vector<std::string>{"completed",
+                                            "dropped",
+                                            "grasp_classified",
+                                            "release_classified",
+                                            "recompressions",
+                                            "twist_cycles",
+                                            "tightened_cycle",
+                                            "true_tight_cycle",
+                                            "max_fz_N",
+                                            "over_events",
+                                            "slip",
+                                            "force_rmse_N",
+                                            "latency_ms",
+                                            "slip_other",
+                                            "lockstep",
+                                            "tight_time_error_s",
+                                            "tight_error_deg",
+                                            "case",
+                                            "negative_case_passed",
+                                            "opened_in_air",
+                                            "holdable",
+                                            "hold"}));
+  EXPECT_EQ(j.at("case"), "normal");
+  EXPECT_TRUE(j.at("negative_case_passed").is_null());
+  EXPECT_EQ(j.at("opened_in_air"), false);
+  EXPECT_TRUE(j.at("holdable").is_boolean());
+  for (const char* key : {"peak_accel_mps2", "grip_needed_N", "grip_allowed_N"})
+    EXPECT_TRUE(j.at("hold").at(key).is_number()) << key;
+  // Null when either instant is missing; numbers when both are there.
+  EXPECT_TRUE(j.at("tight_time_error_s").is_null());
+  EXPECT_TRUE(j.at("tight_error_deg").is_null());
+  rep.tight_time_error_s = 0.25;
+  rep.tight_error_deg = 12.5;
+  const nlohmann::json k = nlohmann::json::parse(report_json(rep));
+  EXPECT_EQ(k.at("tight_time_error_s"), 0.25);
+  EXPECT_EQ(k.at("tight_error_deg"), 12.5);
 }
 
 // A distributed run's latency is an object of three numbers; a number that is not finite is

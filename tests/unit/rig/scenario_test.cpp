@@ -90,6 +90,39 @@ TEST(Scenario, ErrorsNameFileLineKeyAndValue) {
   EXPECT_NE(e.find("tactile-scenario/2"), std::string::npos) << e;
 }
 
+// The sweep's negative cases (docs/slip.md): the bottle displaced from the controller's place, the
+// cap held to the table. Strict like every key.
+TEST(Scenario, NegativeCaseKeys) {
+  std::string text = kMinimal;
+  text.replace(text.find("friction: 0.8"), 13, "friction: 0.8, held_to_table: true");
+  text.replace(text.find("free_turn_deg: 240.0"), 20,
+               "free_turn_deg: 240.0, displaced_mm: [60, -80]");
+  const Scenario s = parse_scenario(text, "s.yaml");
+  EXPECT_TRUE(s.world.cap.held_to_table);
+  EXPECT_DOUBLE_EQ(s.world.bottle.displaced_x_m, 0.060);
+  EXPECT_DOUBLE_EQ(s.world.bottle.displaced_y_m, -0.080);
+  const Scenario plain = parse_scenario(kMinimal, "s.yaml");
+  EXPECT_FALSE(plain.world.cap.held_to_table);
+  EXPECT_EQ(plain.world.bottle.displaced_x_m, 0.0);
+  EXPECT_EQ(plain.world.bottle.displaced_y_m, 0.0);
+
+  std::string bad = kMinimal;
+  bad.replace(bad.find("free_turn_deg: 240.0"), 20, "free_turn_deg: 240.0, displaced_mm: [60]");
+  std::string e = error_of(bad);
+  EXPECT_NE(e.find("bottle.displaced_mm"), std::string::npos) << e;
+  bad = kMinimal;
+  bad.replace(bad.find("free_turn_deg: 240.0"), 20,
+              "free_turn_deg: 240.0, displaced_mm: [0, 5000]");
+  e = error_of(bad);
+  EXPECT_NE(e.find("5000"), std::string::npos) << e;
+  bad = kMinimal;
+  bad.replace(bad.find("friction: 0.8"), 13, "friction: 0.8, held_to_tabel: true");
+  e = error_of(bad);
+  EXPECT_NE(e.find("unknown key 'held_to_tabel' in 'cap' (did you mean 'held_to_table'?)"),
+            std::string::npos)
+      << e;
+}
+
 TEST(Scenario, ControllerOverridesAreKept) {
   const Scenario s =
       parse_scenario(kMinimal + "controller: {twist_yaw_rate_rps: 0.25, ns: 6}\n", "s.yaml");

@@ -8,6 +8,7 @@
 
 #include <deque>
 #include <filesystem>
+#include <numbers>
 #include <vector>
 
 #include "tactile/rig/sensors.hpp"
@@ -37,8 +38,12 @@ std::vector<RecordedFrame> synthetic_stream(std::size_t frames) {
   util::Random rng(20261125);
   std::vector<RecordedFrame> stream(frames);
   std::array<std::array<bool, kElementsPerFingertip>, kFingertips> sliding{};
+  double wrist_yaw = 0;
   for (std::size_t n = 0; n < frames; ++n) {
     RecordedFrame& f = stream[n];
+    // The wrist turns clockwise (tightening) for 13 frames of 20, then back by half as much.
+    wrist_yaw += n % 20 < 13 ? -0.01 : 0.005;
+    f.pose.wrist_yaw_rad = wrist_yaw;
     f.t = static_cast<double>(n + 1) / 100.0;
     const bool twist = n >= frames / 2;
     f.phase_taken = n < frames / 4 ? control::Phase::kLift
@@ -176,8 +181,20 @@ TEST(Scoring, LockstepAndRealTimeOrderGiveTheSameMetrics) {
   ASSERT_GT(a.report.slip.onsets, 50U);
   ASSERT_EQ(a.report.recompressions, 2);
   ASSERT_TRUE(a.report.completed);
+  // The cap meets its stop at frame 370 (t 3.71 s), "tight" is declared at frame 375 (3.76 s);
+  // the wrist turns toward tightening in frames 371 and 372 (0.02 rad), back in 373 to 375.
+  ASSERT_TRUE(a.report.tight_time_error_s && a.report.tight_error_deg);
+  EXPECT_NEAR(*a.report.tight_time_error_s, 0.05, 1e-12);
+  EXPECT_NEAR(*a.report.tight_error_deg, 0.02 * 180 / std::numbers::pi, 1e-9);
+  // In real time the event's time is its arrival (4 ms later here) and the wrist's turn is the
+  // truth's then (turning back, so no more); the rest is the same.
+  ASSERT_TRUE(b.report.tight_time_error_s && b.report.tight_error_deg);
+  EXPECT_NEAR(*b.report.tight_time_error_s, 0.054, 1e-12);
+  EXPECT_NEAR(*b.report.tight_error_deg, *a.report.tight_error_deg, 1e-9);
+  LockstepResult b_same_arrival = b;
+  b_same_arrival.report.tight_time_error_s = a.report.tight_time_error_s;
   // Every metric of the report, as bytes.
-  EXPECT_EQ(report_json(a.report), report_json(b.report));
+  EXPECT_EQ(report_json(a.report), report_json(b_same_arrival.report));
   // And the series: per-frame scores, flags and Fig. 10's x.
   ASSERT_EQ(a.series.frames.size(), b.series.frames.size());
   for (std::size_t n = 0; n < a.series.frames.size(); ++n) {

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "process.hpp"
+#include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/scenario.hpp"
 #include "tactile/util/files.hpp"
 
@@ -78,8 +79,25 @@ TEST(SweepDraw, EveryDrawLiesInItsDocumentedRangeAndItsFileStatesItExactly) {
         EXPECT_EQ(s.camera.noise_sigma, d.noise_sigma);
         EXPECT_EQ(s.camera.fps, d.fps);
         EXPECT_EQ(s.camera.bit_depth, d.bit_depth);
-        EXPECT_TRUE(s.controller.empty()) << "the controller's defaults, no tuning";
+        EXPECT_EQ(s.world.cap.held_to_table, d.scenario_case == sweep::Case::kCapHeld);
+        if (d.scenario_case == sweep::Case::kBottleDisplaced) {
+          EXPECT_EQ(s.world.bottle.displaced_x_m, d.displaced_x_mm / 1000.0);
+          EXPECT_EQ(s.world.bottle.displaced_y_m, d.displaced_y_mm / 1000.0);
+          // The lowering stops above the table, the only other support.
+          ASSERT_EQ(s.controller.size(), 1U);
+          EXPECT_EQ(s.controller[0].first, "lower_limit_m");
+          EXPECT_EQ(s.controller[0].second, sweep::kDisplacedLowerLimitM);
+        } else {
+          EXPECT_EQ(s.world.bottle.displaced_x_m, 0.0);
+          EXPECT_EQ(s.world.bottle.displaced_y_m, 0.0);
+          EXPECT_TRUE(s.controller.empty()) << "the controller's defaults, no tuning";
+        }
       }
+      // Far enough that the cap, lowered over the controller's place, misses the neck.
+      const double displaced = std::hypot(d.displaced_x_mm, d.displaced_y_mm);
+      EXPECT_GE(displaced, sweep::kDisplacementMm.lo - 0.1);
+      EXPECT_LE(displaced, sweep::kDisplacementMm.hi + 0.1);
+      EXPECT_GT(displaced, 2 * sweep::kRanges.radius_mm.hi);
     }
   }
   // The whole range is drawn from, not a corner of it.
@@ -88,6 +106,35 @@ TEST(SweepDraw, EveryDrawLiesInItsDocumentedRangeAndItsFileStatesItExactly) {
   EXPECT_LE(lowest_fps, 61);
   EXPECT_GE(highest_fps, 499);
   EXPECT_EQ(depths, (std::set<int>{8, 16}));
+}
+
+// Exactly one displaced bottle and one held cap in every block of 10 indices, at places that
+// change from block to block and seed to seed.
+TEST(SweepDraw, EveryBlockOfTenHasOneOfEachNegativeCase) {
+  std::set<std::uint64_t> displaced_at, held_at;
+  for (std::uint64_t seed : {0ULL, 1ULL, 20ULL}) {
+    for (std::uint64_t block = 0; block < 100; ++block) {
+      int displaced = 0, held = 0;
+      for (std::uint64_t i = block * 10; i < block * 10 + 10; ++i) {
+        const sweep::Draw d = sweep::draw_scenario(seed, i);
+        if (d.scenario_case == sweep::Case::kBottleDisplaced) {
+          ++displaced;
+          displaced_at.insert(i % 10);
+        }
+        if (d.scenario_case == sweep::Case::kCapHeld) {
+          ++held;
+          held_at.insert(i % 10);
+        }
+      }
+      EXPECT_EQ(displaced, 1) << seed << " " << block;
+      EXPECT_EQ(held, 1) << seed << " " << block;
+    }
+  }
+  EXPECT_EQ(displaced_at.size(), 10U);
+  EXPECT_EQ(held_at.size(), 10U);
+  EXPECT_STREQ(sweep::to_string(sweep::Case::kNormal), "normal");
+  EXPECT_STREQ(sweep::to_string(sweep::Case::kBottleDisplaced), "bottle_displaced");
+  EXPECT_STREQ(sweep::to_string(sweep::Case::kCapHeld), "cap_held");
 }
 
 TEST(SweepDraw, AScenarioDependsOnlyOnTheSeedAndItsIndex) {
@@ -111,6 +158,113 @@ TEST(SweepTable, CsvReadsBackAsWritten) {
   EXPECT_EQ(back[1].number("exit_status"), 134);
   EXPECT_EQ(sweep::csv_text(back), text);
   EXPECT_THROW(sweep::parse_csv("index,method\n1,paper\n", "bad.csv"), std::runtime_error);
+}
+
+// The report's tightness timing fills its columns; null is an empty cell.
+TEST(SweepTable, TightnessTimingComesFromTheReport) {
+  tactile::rig::Report rep;
+  rep.tightened_cycle = 4;
+  rep.true_tight_cycle = 3;
+  rep.tight_time_error_s = 1.25;
+  rep.tight_error_deg = 31.5;
+  const sweep::Draw d = sweep::draw_scenario(1, 0);
+  const sweep::Row row = sweep::rows_from_report(d, tactile::rig::report_json(rep)).at(0);
+  EXPECT_EQ(row.number("tight_cycle_error"), 1);
+  EXPECT_EQ(row.number("tight_time_error_s"), 1.25);
+  EXPECT_EQ(row.number("tight_error_deg"), 31.5);
+  rep.tight_time_error_s.reset();
+  rep.tight_error_deg.reset();
+  const sweep::Row none = sweep::rows_from_report(d, tactile::rig::report_json(rep)).at(0);
+  EXPECT_EQ(none.at("tight_time_error_s"), "");
+  EXPECT_EQ(none.at("tight_error_deg"), "");
+  const std::string summary = sweep::summary_markdown({row, none}, {});
+  EXPECT_NE(summary.find("| tight_time_error_s | 1 | 1.25 |"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("| tight_error_deg | 1 | 31.5 |"), std::string::npos) << summary;
+}
+
+// The negative cases in the table and the summary: a `case` column from the draw, the report's
+// verdict, classifications counted per case and the failed negative scenarios listed by index.
+TEST(SweepTable, NegativeCasesAreCountedPerCaseAndTheFailedListed) {
+  std::vector<sweep::Row> rows;
+  for (std::uint64_t i = 0; i < 10; ++i) {
+    const sweep::Draw d = sweep::draw_scenario(3, i);
+    tactile::rig::Report rep;
+    rep.scenario_case = sweep::to_string(d.scenario_case);
+    rep.grasp_classified.emplace("grasp");  // right in a normal case, wrong when the cap is held
+    rep.release_classified.emplace("release");  // wrong when the bottle is displaced
+    rep.opened_in_air = d.scenario_case == sweep::Case::kBottleDisplaced;
+    tactile::rig::judge_negative_case(rep);
+    const sweep::Row row = sweep::rows_from_report(d, tactile::rig::report_json(rep)).at(0);
+    EXPECT_EQ(row.at("case"), sweep::to_string(d.scenario_case));
+    EXPECT_EQ(row.at("negative_case_passed"),
+              d.scenario_case == sweep::Case::kNormal ? "" : "false");
+    rows.push_back(row);
+    // A report of another case than the draw's is not this scenario's.
+    rep.scenario_case = d.scenario_case == sweep::Case::kCapHeld ? "normal" : "cap_held";
+    EXPECT_THROW(sweep::rows_from_report(d, tactile::rig::report_json(rep)), std::runtime_error);
+  }
+  std::string displaced, held;
+  for (const sweep::Row& r : rows) {
+    if (r.at("case") == "bottle_displaced") displaced = r.at("index");
+    if (r.at("case") == "cap_held") held = r.at("index");
+  }
+  ASSERT_FALSE(displaced.empty());
+  ASSERT_FALSE(held.empty());
+  // A failed run has its case too.
+  EXPECT_EQ(
+      sweep::failed_row(sweep::draw_scenario(3, std::stoull(held)), "paper", 1, "").at("case"),
+      "cap_held");
+  const std::string summary = sweep::summary_markdown(rows, {});
+  EXPECT_NE(summary.find("| normal | 8 | 8 | 8 | 0 | - |"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("| bottle_displaced | 1 | 1 | 1 | 1 | 0 of 1 |"), std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("| cap_held | 1 | 1 | 1 | 0 | 0 of 1 |"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("bottle_displaced failed (index): " + displaced), std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("cap_held failed (index): " + held), std::string::npos) << summary;
+  EXPECT_EQ(sweep::csv_text(sweep::parse_csv(sweep::csv_text(rows), "x.csv")),
+            sweep::csv_text(rows));
+}
+
+// Holdable within F2 from the report; the summary counts completion, drops and OVER of the normal
+// scenarios apart for the holdable and the others, and lists the others by index.
+TEST(SweepTable, HoldableAndNotHoldableAreCountedApart) {
+  std::vector<sweep::Row> rows;
+  std::vector<std::string> normal;
+  for (std::uint64_t i = 0; i < 10; ++i) {
+    const sweep::Draw d = sweep::draw_scenario(3, i);
+    tactile::rig::Report rep;
+    rep.scenario_case = sweep::to_string(d.scenario_case);
+    tactile::rig::judge_negative_case(rep);
+    rep.hold.grip_needed_n = 0.5;
+    rep.hold.grip_allowed_n = i < 7 ? 40.0 : 0.4;
+    rep.hold.holdable = i < 7;
+    rep.completed = i < 7 && d.scenario_case == sweep::Case::kNormal;
+    rep.dropped = i >= 7;
+    rep.over_events = i == 0 ? 1 : 0;
+    const sweep::Row row = sweep::rows_from_report(d, tactile::rig::report_json(rep)).at(0);
+    EXPECT_EQ(row.at("holdable"), i < 7 ? "true" : "false");
+    EXPECT_EQ(row.number("grip_needed_N"), 0.5);
+    EXPECT_EQ(row.number("grip_allowed_N"), rep.hold.grip_allowed_n);
+    if (d.scenario_case == sweep::Case::kNormal) normal.push_back(row.at("index"));
+    rows.push_back(row);
+  }
+  std::size_t normal_holdable = 0;
+  for (const std::string& i : normal)
+    normal_holdable += std::stoi(i) < 7 ? 1 : 0;
+  const std::size_t normal_not = normal.size() - normal_holdable;
+  const std::string summary = sweep::summary_markdown(rows, {});
+  EXPECT_NE(summary.find(fmt::format(
+                "| holdable within F2 | {} | {} | 0 | {} |", normal_holdable, normal_holdable,
+                std::find(normal.begin(), normal.end(), "0") != normal.end() ? 1 : 0)),
+            std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find(fmt::format("| not holdable within F2 | {} | 0 | {} | 0 |", normal_not,
+                                     normal_not)),
+            std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("Not holdable within F2 (index, any case): 7, 8, 9"), std::string::npos)
+      << summary;
 }
 
 // The ideal-sensor recall of the 200 scenarios of seed 20 (docs/slip.md): drawn dashed, their

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "tactile/rig/truth.hpp"
 
@@ -150,6 +151,63 @@ TEST(World, FirmGraspHoldsTheCapWithoutSlip) {
     EXPECT_LE(std::hypot(e.ft_n[0], e.ft_n[1]), p.cap.friction * e.fn_n);
   }
   EXPECT_GE(in_contact, 5);  // a patch of elements, like Fig. 3
+}
+
+// The sweep's held cap (docs/slip.md, "Negative cases"): a grip at F2 = 2 N per element, many
+// times the cap's weight, lifts the fingertips off it; the cap stays on the table.
+TEST(World, ACapHeldToTheTableStaysThereUnderAFullGrip) {
+  WorldParams p;
+  p.cap.held_to_table = true;
+  const World w = grasp_and_lift(p, 1e-4, 2.0);
+  EXPECT_FALSE(w.cap().lifted);
+  EXPECT_FALSE(w.cap().dropped);
+  EXPECT_EQ(w.cap().place, CapPlace::kOnTable);
+  EXPECT_NEAR(w.cap().position_m.z, p.cap.height_m / 2, 1e-4);
+  EXPECT_NEAR(w.cap().position_m.x, p.cap.x_m, 1e-4);
+  EXPECT_NEAR(w.cap().position_m.y, p.cap.y_m, 1e-4);
+  // Without the hold, the same grip lifts it.
+  p.cap.held_to_table = false;
+  EXPECT_TRUE(grasp_and_lift(p, 1e-4, 2.0).cap().lifted);
+}
+
+// "Holdable within F2" (docs/rig.md, "Holding within F2"): the grip hold_need() allows is what the
+// world's fingertip presses on the cap when its most pressed element reaches F2, and the grip it
+// needs is the weight and the peak acceleration over 2 mu_s.
+TEST(World, HoldNeedIsTheWorldsGripAtF2AndTheLoadOverTwoMu) {
+  WorldParams p;
+  p.cap.mass_kg = 0.05;
+  p.cap.friction = 0.5;
+  p.arm.vibration_m = 0.0005;
+  p.arm.vibration_hz = 10;
+  const double f2 = 2.5;
+  const HoldNeed h = hold_need(p, f2);
+  const double a = p.arm.max_accel_mps2 + std::pow(2 * std::numbers::pi * 10, 2) * 0.0005;
+  EXPECT_DOUBLE_EQ(h.peak_accel_mps2, a);
+  EXPECT_DOUBLE_EQ(h.grip_needed_n, 0.05 * (9.81 + a) / (2 * 0.5));
+  EXPECT_TRUE(h.holdable);
+  // Squeeze until the apex carries F2; the elements' normal forces then add up to the allowed
+  // grip (the grasp sits 2 mm below the cap's mid-height, which shifts the rim rings a little).
+  const World w = grasp(p, 1e-4, f2);
+  double pressed = 0;
+  for (const Element& e : w.fingertip(0).elements)
+    pressed += e.fn_n;
+  EXPECT_NEAR(pressed, h.grip_allowed_n, 0.03 * h.grip_allowed_n) << "allowed " << h.grip_allowed_n;
+  EXPECT_GT(h.grip_allowed_n, 10 * f2) << "many elements share the grip";
+  // A cap too heavy for its friction is not holdable.
+  p.cap.mass_kg = 5.0;
+  p.cap.friction = 0.1;
+  EXPECT_FALSE(hold_need(p, f2).holdable);
+}
+
+// The sweep's displaced bottle: the world's neck stands where the displacement puts it, not at
+// (x_m, y_m), the place the controller is given (Lockstep.DisplacedBottle... runs the task).
+TEST(World, ADisplacedBottleStandsAwayFromTheGivenPlace) {
+  WorldParams p;
+  p.bottle.displaced_x_m = 0.1;
+  p.bottle.displaced_y_m = -0.02;
+  const World w(p);
+  EXPECT_DOUBLE_EQ(w.bottle_x_m(), p.bottle.x_m + 0.1);
+  EXPECT_DOUBLE_EQ(w.bottle_y_m(), p.bottle.y_m - 0.02);
 }
 
 TEST(World, IncipientSlipAtLightlyPressedElementsBeforeGrossSlip) {

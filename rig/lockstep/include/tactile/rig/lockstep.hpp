@@ -109,6 +109,22 @@ struct Report {
     double max = 0;
   };
   std::optional<Latency> latency_ms;
+  // Tightness timing (docs/rig.md): "tight" declared (the controller's CAP_TIGHT) minus the cap
+  // meeting its stop in the truth (the first frame with cap_tight), in seconds, and the wrist's
+  // turn in the tightening direction between the two instants (the over-tightening), in degrees.
+  // Null when either is missing.
+  std::optional<double> tight_time_error_s;
+  std::optional<double> tight_error_deg;
+  // The sweep's negative cases (docs/slip.md): "normal", "bottle_displaced" (the bottle stands
+  // away from the controller's place: no release may be classified, the fingers may not open
+  // with the cap in the air) or "cap_held" (the cap is held to the table: no grasp may be
+  // classified); whether the run passed it (null for "normal"); and whether the controller
+  // commanded OPEN while the cap was in the air (neither on the table nor on the bottle).
+  std::string scenario_case = "normal";
+  std::optional<bool> negative_case_passed;
+  bool opened_in_air = false;
+  // Whether the hand can hold this cap within F2 (truth: weight, peak acceleration, mu_s).
+  HoldNeed hold;
   // Ours.
   std::uint64_t seed = 0;
   double sim_time_s = 0;
@@ -200,6 +216,12 @@ struct LockstepResult {
   std::array<Calibration, kFingertips> calibrations;
   bool physics_finite = true;  // no step ever produced a non-finite value
 };
+
+// The scenario's case (Report::scenario_case) from its world: "cap_held", "bottle_displaced" or
+// "normal".
+const char* scenario_case(const WorldParams& world);
+// Sets report.negative_case_passed from the case and the classifications (and opened_in_air).
+void judge_negative_case(Report& report);
 
 // Runs the scenario to its end (DONE, ABORTED, a drop or max_time_s). Throws only for a bad
 // scenario (std::invalid_argument from the cores' constructors).

@@ -8,6 +8,7 @@
 // get the same metrics for the same stream (ScoringTest). No clock: times are arguments.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string_view>
 #include <vector>
@@ -74,6 +75,19 @@ class RunScorer {
 
   LockstepResult& run_;
   control::FlagAnalyzer flags_;
+  // The wrist's turn in the tightening direction (+1: yaw increasing tightens), summed over the
+  // frames' increments in that direction only (the return strokes with open fingers do not
+  // count), and its value when the cap met its stop and when "tight" was declared.
+  double tighten_yaw_sign_ = -1;
+  bool have_wrist_yaw_ = false;
+  double last_wrist_yaw_rad_ = 0;
+  double wrist_turn_deg_ = 0;
+  struct Moment {
+    double t = 0;
+    double wrist_turn_deg = 0;
+  };
+  std::optional<Moment> cap_stop_;
+  std::optional<Moment> declared_tight_;
   bool record_;
   // [0]: the run's detector (the controller's), [1]: the other; each on the measured frames and
   // on the ideal sensor's readings.

@@ -32,6 +32,10 @@ struct CapParams {
   double x_m = 0.35;            // resting place on the table
   double y_m = -0.10;
   double table_friction = 0.4;
+  // A negative case of the sweep (docs/slip.md): the cap is held to the table where it rests,
+  // by a stiff anchor (the table's own stiffness and damping, horizontally and upward) that no
+  // grip within F2 can pull it out of. It can still turn.
+  bool held_to_table = false;
 };
 
 struct BottleParams {
@@ -43,6 +47,10 @@ struct BottleParams {
   double tight_stiffness_nm_per_rad = 50.0;  // slope of the rising torque past free_turn
   double capture_radius_m = 0.004;  // the neck's chamfer centres a cap this close to its axis
   bool tighten_clockwise = true;    // seen from above (yaw decreasing): a right-hand thread
+  // A negative case of the sweep (docs/slip.md): the bottle really stands this far from (x_m,
+  // y_m), the place the controller is given.
+  double displaced_x_m = 0;
+  double displaced_y_m = 0;
 };
 
 struct ArmParams {
@@ -169,6 +177,22 @@ struct ArmState {
   bool stopped = false;
 };
 
+// Whether the hand can hold the cap within F2, from the world's parameters alone (docs/rig.md,
+// "Holding within F2"): the grip each fingertip needs to carry the cap's weight and its peak
+// acceleration on friction, against the grip it can press with no element beyond F2.
+struct HoldNeed {
+  // The wrist's acceleration bound (arm.max_accel_mps2) plus the vibration's peak,
+  // (2 pi f)^2 A, both taken along gravity.
+  double peak_accel_mps2 = 0;
+  // Per fingertip: m (g + peak_accel) / (2 mu_s).
+  double grip_needed_n = 0;
+  // Per fingertip: the sum of the elements' normal forces on the cap when the most pressed one
+  // (the apex) carries F2, from the dome's element layout against the cap's cylinder.
+  double grip_allowed_n = 0;
+  bool holdable = false;  // grip_needed_n <= grip_allowed_n
+};
+HoldNeed hold_need(const WorldParams& p, double f2_n);
+
 // The world. Construction allocates; step() and apply() allocate nothing and never throw.
 class World {
  public:
@@ -183,6 +207,10 @@ class World {
   // of arm and cap and letting go of every feeler, if anything became non-finite (never seen;
   // guarded so that no NaN can leave the physics).
   bool step(double dt) noexcept;
+
+  // Where the bottle's axis really stands: its place plus the displacement.
+  double bottle_x_m() const { return p_.bottle.x_m + p_.bottle.displaced_x_m; }
+  double bottle_y_m() const { return p_.bottle.y_m + p_.bottle.displaced_y_m; }
 
   double time() const { return t_; }
   const ArmState& arm() const { return arm_; }

@@ -32,6 +32,19 @@ struct Ranges {
 };
 inline constexpr Ranges kRanges{};
 
+// The negative cases of the classifications (docs/slip.md, "Negative cases"): in every block of
+// 10 consecutive indices (0-9, 10-19, ...) one scenario has its bottle displaced and another its
+// cap held to the table, at places drawn per (sweep seed, block).
+enum class Case : std::uint8_t { kNormal, kBottleDisplaced, kCapHeld };
+// "normal", "bottle_displaced", "cap_held": the CSV's `case` and the report's `case`.
+const char* to_string(Case c);
+inline constexpr std::uint64_t kCaseBlock = 10;
+// The bottle's displacement from the controller's place: this far, in one of 8 directions.
+inline constexpr Range kDisplacementMm{60.0, 120.0};
+// The lowest wrist height of the lowering (controller.lower_limit_m) in a displaced-bottle case:
+// the default, 0, lowers the cap onto the table, which is a support too.
+inline constexpr double kDisplacedLowerLimitM = 0.09;
+
 // One drawn scenario. Values are rounded to a fixed grid (0.1 g, 0.01 mm, 0.001, 0.1 deg, 1 um,
 // 0.01 Hz, 0.01 levels, whole fps) so that the scenario file states them exactly.
 struct Draw {
@@ -47,13 +60,19 @@ struct Draw {
   double noise_sigma = 0;
   int fps = 0;
   int bit_depth = 0;
+  Case scenario_case = Case::kNormal;
+  // Drawn for every scenario (after the values above, which they leave unchanged), used by
+  // kBottleDisplaced: bottle.displaced_mm.
+  double displaced_x_mm = 0;
+  double displaced_y_mm = 0;
 };
 
 // Scenario `index` of the sweep with seed `sweep_seed`: depends on nothing else. Pure.
 Draw draw_scenario(std::uint64_t sweep_seed, std::uint64_t index);
 
 // The drawn scenario as a scenario file (tactile-scenario/1), the controller's defaults (no
-// `controller` section). max_sim_time_s > 0 writes sim.max_time_s (short test sweeps).
+// `controller` section, except lower_limit_m in a displaced-bottle case). max_sim_time_s > 0
+// writes sim.max_time_s (short test sweeps).
 std::string scenario_yaml(const Draw& d, double max_sim_time_s = 0);
 
 // --- the table ---------------------------------------------------------------------------------
