@@ -33,6 +33,8 @@ const DoubleField kDoubles[] = {
     {"field_min_fz_n", &Config::field_min_fz_n},
     {"field_arm_speed_mps", &Config::field_arm_speed_mps},
     {"field_arm_yaw_rate_rps", &Config::field_arm_yaw_rate_rps},
+    {"load_transfer_n", &Config::load_transfer_n},
+    {"lift_confirm_s", &Config::lift_confirm_s},
     {"approach_speed_mps", &Config::approach_speed_mps},
     {"recompress_gain_mps", &Config::recompress_gain_mps},
     {"recompress_duration_s", &Config::recompress_duration_s},

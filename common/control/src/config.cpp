@@ -108,6 +108,8 @@ void Config::validate() const {
   non_negative("field_min_fz_n", field_min_fz_n);
   non_negative("field_arm_speed_mps", field_arm_speed_mps);
   non_negative("field_arm_yaw_rate_rps", field_arm_yaw_rate_rps);
+  positive("load_transfer_n", load_transfer_n);
+  positive("lift_confirm_s", lift_confirm_s);
 
   positive("max_finger_speed_mps", max_finger_speed_mps);
   positive("approach_speed_mps", approach_speed_mps);

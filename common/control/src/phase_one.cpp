@@ -61,6 +61,10 @@ void PhaseOneSequencer::enter(Phase p, const StepInput& in, SegmentIds& ids,
       seq_.search(t);
       break;
     case Phase::kLift:
+      lift_base_n_ = load();
+      lift_start_s_ = t;
+      lift_frames_ = lift_slip_frames_ = 0;
+      lift_gain_sum_n_ = 0;
       seq_.move(carry("MOVE3", above_cap(cfg_.carry_height_m), cfg_.lift_speed_mps), t, ids, out);
       break;
     case Phase::kTransport:
@@ -68,6 +72,9 @@ void PhaseOneSequencer::enter(Phase p, const StepInput& in, SegmentIds& ids,
                 out);
       break;
     case Phase::kLower:
+      lower_base_n_ = load();
+      carried_n_ = lower_base_n_ - lift_base_n_;
+      lower_below_ = 0;
       seq_.move(carry("MOVE5", above_bottle(cfg_.lower_limit_m), cfg_.lower_speed_mps), t, ids,
                 out);
       break;
@@ -114,8 +121,91 @@ SlipDirection PhaseOneSequencer::slip_direction(const StepInput& in) const {
                                 cfg_.direction_deadband_mm);
 }
 
+void PhaseOneSequencer::track_load(const StepInput& in) noexcept {
+  for (std::size_t f = 0; f < kFingertips; ++f) {
+    if (in.fingertips[f].fresh) load_[f] = load_along_gravity(in.fingertips[f], cfg_.gravity_axis);
+  }
+}
+
+double PhaseOneSequencer::load() const {
+  double sum = 0;
+  for (double l : load_)
+    sum += l;
+  return sum / static_cast<double>(kFingertips);
+}
+
+namespace {
+
+bool any_fresh(const StepInput& in) {
+  for (const FingertipInput& f : in.fingertips) {
+    if (f.fresh) return true;
+  }
+  return false;
+}
+
+Event by_load(EventKind kind, double value, const char* text) {
+  Event e;
+  e.kind = kind;
+  e.value = value;
+  e.text = text;
+  return e;
+}
+
+}  // namespace
+
+// The field detector's lift: after lift_confirm_s, a contact that slipped in most fresh frames
+// while the arm rose holds a cap that something holds from below (put it back, as the paper's
+// release on the lift); else a load gained beyond load_transfer_n on average is the cap's weight
+// arriving: a grasp. A light cap whose load stays within the bound is not classified.
+void PhaseOneSequencer::lift_by_load(const StepInput& in, SegmentIds& ids,
+                                     StepOutput& out) noexcept {
+  if (in.t < settled_after_s_ || !any_fresh(in)) return;
+  ++lift_frames_;
+  if (in.flags.slip) ++lift_slip_frames_;
+  lift_gain_sum_n_ += load() - lift_base_n_;
+  if (in.t - lift_start_s_ < cfg_.lift_confirm_s || lift_frames_ < 3) return;
+  const double gained = lift_gain_sum_n_ / static_cast<double>(lift_frames_);
+  if (2 * lift_slip_frames_ > lift_frames_) {
+    seq_.event(by_load(EventKind::kReleaseClassified, gained,
+                       "slipping while the arm rises: the cap is held from below"),
+               out);
+    released_on_lift_ = true;
+    enter(Phase::kRelease, in, ids, out);
+    return;
+  }
+  if (gained > cfg_.load_transfer_n) {
+    seq_.event(by_load(EventKind::kGraspClassified, gained, "the cap's weight carried on the lift"),
+               out);
+    grasp_classified_ = true;
+  }
+}
+
+// The field detector's lowering: the load along gravity falls by half the load the lift brought
+// (at least load_transfer_n) in three fresh frames in a row: the cap's weight went to a support.
+void PhaseOneSequencer::lower_by_load(const StepInput& in, SegmentIds& ids,
+                                      StepOutput& out) noexcept {
+  if (any_fresh(in)) {
+    const double bound = 0.5 * std::max(carried_n_, cfg_.load_transfer_n);
+    const double change = load() - lower_base_n_;
+    lower_below_ = in.t >= settled_after_s_ && change < -bound ? lower_below_ + 1 : 0;
+    if (lower_below_ >= 3) {
+      seq_.event(by_load(EventKind::kReleaseClassified, change,
+                         "the load along gravity went to a support"),
+                 out);
+      enter(Phase::kRelease, in, ids, out);
+      return;
+    }
+  }
+  if (seq_.segment_done(in, out)) {
+    seq_.abort("lowered to lower_limit_m without the load going to a support", out);
+  }
+}
+
 void PhaseOneSequencer::lift(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept {
-  if (!grasp_classified_) {
+  if (!grasp_classified_ && cfg_.slip_detector == SlipDetectorKind::kField) {
+    lift_by_load(in, ids, out);
+    if (released_on_lift_) return;
+  } else if (!grasp_classified_) {
     const SlipDirection d = slip_direction(in);
     if (d.classification == SlipClass::kGrasp) {
       // The weight pulls the cap along gravity: it is held; keep lifting.
@@ -135,6 +225,10 @@ void PhaseOneSequencer::lift(const StepInput& in, SegmentIds& ids, StepOutput& o
 // Positive slips here (deceleration, vibration) are the estimator's: re-compression. The first
 // negative one is the cap meeting the bottle or the ground.
 void PhaseOneSequencer::lower(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept {
+  if (cfg_.slip_detector == SlipDetectorKind::kField) {
+    lower_by_load(in, ids, out);
+    return;
+  }
   const SlipDirection d = slip_direction(in);
   if (d.classification == SlipClass::kRelease) {
     seq_.event(classified(EventKind::kReleaseClassified, d), out);
@@ -154,6 +248,7 @@ void PhaseOneSequencer::retracted(StepOutput& out) noexcept {
 
 void PhaseOneSequencer::step(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept {
   defer_classification_on_deadman(in);
+  track_load(in);
   switch (seq_.phase()) {
     case Phase::kApproach:
       if (seq_.segment_done(in, out)) enter(Phase::kDescend, in, ids, out);

@@ -49,4 +49,14 @@ SlipDirection analyze_slip_direction(const std::array<FingertipInput, kFingertip
   return d;
 }
 
+double load_along_gravity(const FingertipInput& in, Vec3 gravity_axis) noexcept {
+  double load = 0;
+  for (const ElementReading& r : in.elements) {
+    if (!r.contact || !std::isfinite(r.fx) || !std::isfinite(r.fy)) continue;
+    const double along = gravity_axis.x * r.fx + gravity_axis.y * r.fy;
+    if (std::isfinite(along)) load += along;
+  }
+  return std::isfinite(load) ? load : 0.0;
+}
+
 }  // namespace tactile::control

@@ -91,6 +91,8 @@ const std::vector<std::string>& controller_keys() {
       "field_min_fz_n",
       "field_arm_speed_mps",
       "field_arm_yaw_rate_rps",
+      "load_transfer_n",
+      "lift_confirm_s",
   };
   return keys;
 }

@@ -131,6 +131,51 @@ TEST(Lockstep, HeldCapIsJudgedOnTheLift) {
   EXPECT_EQ(judged.negative_case_passed, std::nullopt);
 }
 
+// The field detector classifies the lift and the lowering from the load transfer
+// (docs/slip.md, "Decisions on the field detector"): a 4 g cap, whose slips the paper's rule
+// never sees on the lift, is classified a grasp by the weight its fingertips take on, and
+// released where its weight goes to the bottle.
+TEST(Lockstep, FieldDetectorClassifiesALightCapByItsLoad) {
+  Scenario s = load_scenario(kDir / "default.yaml");
+  s.world.cap.mass_kg = 0.004;
+  s.slip_detector = "field";
+  LockstepOptions o;
+  o.record_series = false;
+  const Report rep = run_lockstep(s, o).report;
+  EXPECT_EQ(rep.slip.detector, "field");
+  EXPECT_EQ(rep.slip_other.detector, "paper");
+  EXPECT_TRUE(rep.completed) << rep.end_reason;
+  EXPECT_EQ(rep.grasp_classified, std::optional<std::string>("grasp"));
+  EXPECT_EQ(rep.release_classified, std::optional<std::string>("release"));
+  EXPECT_FALSE(rep.opened_in_air);
+  EXPECT_EQ(rep.tightened_cycle, rep.true_tight_cycle);
+}
+
+// The negative cases with the field detector: the held cap slips under fingertips that rise
+// (put back: no grasp), the displaced bottle takes no load (no release, the fingers stay shut).
+TEST(Lockstep, FieldDetectorPassesTheNegativeCases) {
+  LockstepOptions o;
+  o.record_series = false;
+  Scenario held = load_scenario(kDir / "default.yaml");
+  held.world.cap.held_to_table = true;
+  held.max_time_s = 12.0;
+  held.slip_detector = "field";
+  const Report h = run_lockstep(held, o).report;
+  EXPECT_NE(h.grasp_classified, std::optional<std::string>("grasp"));
+  EXPECT_EQ(h.negative_case_passed, std::optional<bool>(true));
+
+  Scenario displaced = load_scenario(kDir / "default.yaml");
+  displaced.world.bottle.displaced_x_m = 0.1;
+  displaced.controller.emplace_back("lower_limit_m", 0.09);
+  displaced.slip_detector = "field";
+  const Report d = run_lockstep(displaced, o).report;
+  EXPECT_EQ(d.grasp_classified, std::optional<std::string>("grasp"));
+  EXPECT_EQ(d.release_classified, std::nullopt);
+  EXPECT_FALSE(d.opened_in_air);
+  EXPECT_EQ(d.negative_case_passed, std::optional<bool>(true));
+  EXPECT_EQ(d.end_reason, "aborted: lowered to lower_limit_m without the load going to a support");
+}
+
 TEST(Lockstep, SameSeedSameReportBytes) {
   Scenario s = load_scenario(kDir / "default.yaml");
   s.max_time_s = 8.0;  // through the grasp, the lift and its slip classification

@@ -63,6 +63,14 @@ struct Config {
   // The arm moves when the wrist's reported speed or yaw rate exceeds these.
   double field_arm_speed_mps = 0.002;
   double field_arm_yaw_rate_rps = 0.02;
+  // With the field detector the lift and the lowering classify from the load transfer: the shear
+  // load along gravity the fingertips carry (docs/slip.md, "Decisions on the field detector").
+  // A change of the load per fingertip beyond this is the cap's weight arriving (N; a 3 g cap
+  // brings 0.015 N to each fingertip).
+  double load_transfer_n = 0.006;
+  // The lift decides after this long: the cap carried (load arrived, the contact mostly sticks)
+  // is a grasp; a contact slipping in most frames while the arm rises is a cap held from below.
+  double lift_confirm_s = 0.2;
   // A slip is classified only when its displacement along gravity exceeds this in magnitude.
   // 0 is the paper's rule (the sign alone decides).
   double direction_deadband_mm = 0.0;

@@ -9,6 +9,9 @@
 //
 // Slips during LIFT, TRANSPORT and LOWER are answered by the finger speed estimator (MOVE mode)
 // with re-compression; this class only decides the steps.
+#include <array>
+#include <cstdint>
+
 #include "tactile/control/config.hpp"
 #include "tactile/control/sequencer.hpp"
 #include "tactile/control/slip_direction.hpp"
@@ -36,6 +39,11 @@ class PhaseOneSequencer {
  private:
   void enter(Phase p, const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
   void lift(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
+  // The field detector's lift and lowering: classified from the load transfer.
+  void track_load(const StepInput& in) noexcept;
+  double load() const;
+  void lift_by_load(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
+  void lower_by_load(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
   void lower(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
   void retracted(StepOutput& out) noexcept;
   void defer_classification_on_deadman(const StepInput& in) noexcept;
@@ -52,6 +60,20 @@ class PhaseOneSequencer {
   bool grasp_classified_ = false;
   bool released_on_lift_ = false;
   WristPose release_pose_;
+  // The load transfer (field detector): each fingertip's load along gravity on its latest fresh
+  // frame; the load when the lift began; over the lift so far, the fresh frames, those with
+  // SLIP and the sum of the load gained; when the lowering began, the load and the load the lift
+  // brought (the cap's weight as the fingertips carry it); fresh frames in a row below the
+  // release's bound.
+  std::array<double, kFingertips> load_{};
+  double lift_base_n_ = 0;
+  double lift_start_s_ = 0;
+  std::uint32_t lift_frames_ = 0;
+  std::uint32_t lift_slip_frames_ = 0;
+  double lift_gain_sum_n_ = 0;
+  double lower_base_n_ = 0;
+  double carried_n_ = 0;
+  std::uint32_t lower_below_ = 0;
 };
 
 }  // namespace tactile::control

@@ -30,4 +30,8 @@ SlipDirection analyze_slip_direction(const std::array<FingertipInput, kFingertip
                                      const Flags& flags, Vec3 gravity_axis,
                                      double deadband_mm) noexcept;
 
+// The shear load along gravity one fingertip carries: the sum of F_t . gravity_axis over its
+// in-contact elements with finite forces (N). Positive: the object pulls along gravity.
+double load_along_gravity(const FingertipInput& in, Vec3 gravity_axis) noexcept;
+
 }  // namespace tactile::control
