@@ -87,4 +87,11 @@ BENCHMARK(field)->ArgName("contacts")->Arg(0)->Arg(5)->Arg(20)->Arg(41);
 }  // namespace
 }  // namespace tactile::control
 
-BENCHMARK_MAIN();
+// Google Benchmark's flags only; an unknown option is a usage error (exit 2), as for every program.
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
