@@ -65,13 +65,16 @@ FingertipFlags FlagAnalyzer::analyze(const FingertipInput& in,
   });
 }
 
-Flags FlagAnalyzer::analyze(const std::array<FingertipInput, kFingertips>& in, FingerMode mode,
-                            bool twist_phase) const noexcept {
+namespace {
+
+// The hand's flags from each fingertip's (`tip(f)`), with the fingers' mode.
+template <typename Tip>
+Flags combine(FingerMode mode, Tip tip) noexcept {
   Flags flags;
   flags.search = mode == FingerMode::kSearch;
   flags.move = mode == FingerMode::kMove;
   for (std::size_t f = 0; f < kFingertips; ++f) {
-    flags.fingertip[f] = analyze(in[f], twist_phase);
+    flags.fingertip[f] = tip(f);
     flags.touch = flags.touch || flags.fingertip[f].touch;
     flags.slip = flags.slip || flags.fingertip[f].slip;
     flags.over = flags.over || flags.fingertip[f].over;
@@ -79,19 +82,17 @@ Flags FlagAnalyzer::analyze(const std::array<FingertipInput, kFingertips>& in, F
   return flags;
 }
 
+}  // namespace
+
+Flags FlagAnalyzer::analyze(const std::array<FingertipInput, kFingertips>& in, FingerMode mode,
+                            bool twist_phase) const noexcept {
+  return combine(mode, [&](std::size_t f) { return analyze(in[f], twist_phase); });
+}
+
 Flags FlagAnalyzer::analyze(
     const std::array<FingertipInput, kFingertips>& in, FingerMode mode,
     const std::array<const FingertipSlip*, kFingertips>& slip) const noexcept {
-  Flags flags;
-  flags.search = mode == FingerMode::kSearch;
-  flags.move = mode == FingerMode::kMove;
-  for (std::size_t f = 0; f < kFingertips; ++f) {
-    flags.fingertip[f] = analyze(in[f], *slip[f]);
-    flags.touch = flags.touch || flags.fingertip[f].touch;
-    flags.slip = flags.slip || flags.fingertip[f].slip;
-    flags.over = flags.over || flags.fingertip[f].over;
-  }
-  return flags;
+  return combine(mode, [&](std::size_t f) { return analyze(in[f], *slip[f]); });
 }
 
 Vec3 element_normal(const FingertipInput& in, std::int32_t index) noexcept {

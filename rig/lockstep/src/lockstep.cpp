@@ -34,9 +34,7 @@ double nearest_rank_percentile(std::vector<double> v, double q) {
 
 void SlipScorer::add(std::size_t i, std::size_t k, std::uint64_t frame, bool predicted, bool ideal,
                      const ElementTruth& et, double thr) {
-  m_.true_positives += predicted && et.sliding ? 1 : 0;
-  m_.false_positives += predicted && !et.sliding ? 1 : 0;
-  m_.false_negatives += !predicted && et.sliding ? 1 : 0;
+  measured_.add(predicted, et.sliding);
   ideal_.add(ideal, et.sliding);
   Element& es = elements_[i][k];
   const bool changed = et.visible != es.was_visible;
@@ -83,8 +81,11 @@ void SlipScorer::finish(SlipMetrics& out) {
       }
     }
   }
-  m_.precision = ratio(m_.true_positives, m_.false_positives);
-  m_.recall = ratio(m_.true_positives, m_.false_negatives);
+  m_.true_positives = measured_.tp;
+  m_.false_positives = measured_.fp;
+  m_.false_negatives = measured_.fn;
+  m_.precision = ratio(measured_.tp, measured_.fp);
+  m_.recall = ratio(measured_.tp, measured_.fn);
   m_.ideal_precision = ratio(ideal_.tp, ideal_.fp);
   m_.ideal_recall = ratio(ideal_.tp, ideal_.fn);
   m_.precision_clear = ratio(clear_.tp, clear_.fp);

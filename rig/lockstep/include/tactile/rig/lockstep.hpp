@@ -83,7 +83,7 @@ class SlipScorer {
   std::array<std::array<Element, kElementsPerFingertip>, kFingertips> elements_{};
   std::vector<double> latencies_;
   SlipMetrics m_;
-  Counts ideal_, clear_, ideal_clear_;
+  Counts measured_, ideal_, clear_, ideal_clear_;
 };
 
 // The scenario report: the fixed keys plus a few of our own (docs/rig.md).
