@@ -211,7 +211,7 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
     const double ft = std::hypot(r.fx, r.fy);
     const double ratio = r.fz >= fn_min_n_ ? ft / r.fz : 0.0;
     if (!r.has_displacement) {
-      h = History{true, false, r.fz, ratio};
+      h = History{true, false, ratio};
       out.state[i] = ElementSlipState::kNone;
       continue;
     }
@@ -247,7 +247,7 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
     } else {
       out.state[i] = ElementSlipState::kStick;
     }
-    h = History{true, slides, r.fz, ratio};
+    h = History{true, slides, ratio};
   }
 }
 

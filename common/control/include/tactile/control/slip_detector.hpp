@@ -105,7 +105,6 @@ class SlipDetector {
   struct History {
     bool valid = false;
     bool sliding = false;
-    double fz_n = 0;
     double ratio = 0;
   };
   void decide_paper(const FingertipInput& in, double threshold_mm, FingertipSlip& out) noexcept;
