@@ -67,6 +67,7 @@ void run(benchmark::State& state, SlipDetectorKind kind) {
   std::size_t n = 0;
   for (auto _ : state) {
     in.elements = f.frames[n++ % kFrames];
+    in.camera_timestamp_ns = static_cast<std::int64_t>(n) * 5'000'000;  // 200 fps
     const FingertipSlip& s = det.update(0, in, 0.004, ArmMotion{0.0, 0.5});
     const FingertipFlags ff = flags.analyze(in, s);
     benchmark::DoNotOptimize(ff);
@@ -80,9 +81,13 @@ void paper(benchmark::State& s) {
 void field(benchmark::State& s) {
   run(s, SlipDetectorKind::kField);
 }
+void learned(benchmark::State& s) {
+  run(s, SlipDetectorKind::kLearned);
+}
 
 BENCHMARK(paper)->ArgName("contacts")->Arg(0)->Arg(5)->Arg(20)->Arg(41);
 BENCHMARK(field)->ArgName("contacts")->Arg(0)->Arg(5)->Arg(20)->Arg(41);
+BENCHMARK(learned)->ArgName("contacts")->Arg(0)->Arg(5)->Arg(20)->Arg(41);
 
 }  // namespace
 }  // namespace tactile::control

@@ -123,10 +123,11 @@ int run(int argc, char** argv) {
                         ->allow_extra_args(true)
                         ->excludes(sweep_opt);
   std::string slip_detector;
-  app.add_option("--slip-detector", slip_detector,
-                 "the controller's slip detector, paper or field, overriding the scenario's "
-                 "controller.slip_detector (docs/slip.md)");
-  std::string detectors = "paper,field";
+  app.add_option(
+      "--slip-detector", slip_detector,
+      "the controller's slip detector, paper, field or learned, overriding the scenario's "
+      "controller.slip_detector (docs/slip.md)");
+  std::string detectors = "paper,field,learned";
   app.add_option("--detectors", detectors,
                  "sweep: run every scenario once with each of these slip detectors")
       ->capture_default_str();
@@ -179,9 +180,10 @@ int run(int argc, char** argv) {
         if (!tactile::control::slip_detector_from_string(name) ||
             std::find(sweep.detectors.begin(), sweep.detectors.end(), name) !=
                 sweep.detectors.end()) {
-          throw tactile::cli::UsageError(
-              "--detectors must list paper and/or field, each once, separated by commas; got '" +
-              detectors + "'");
+          throw tactile::cli::UsageError("--detectors must list detectors (" +
+                                         std::string(tactile::control::kSlipDetectorNames) +
+                                         "), each once, separated by commas; got '" + detectors +
+                                         "'");
         }
         sweep.detectors.push_back(name);
         at = comma + 1;
@@ -192,7 +194,8 @@ int run(int argc, char** argv) {
     }
     if (scenario_path.empty()) throw tactile::cli::UsageError("--scenario is required");
     if (!slip_detector.empty() && !tactile::control::slip_detector_from_string(slip_detector)) {
-      throw tactile::cli::UsageError("--slip-detector must be paper or field; got '" +
+      throw tactile::cli::UsageError("--slip-detector must be " +
+                                     std::string(tactile::control::kSlipDetectorNames) + "; got '" +
                                      slip_detector + "'");
     }
     tactile::rig::Scenario scenario = tactile::rig::load_scenario(scenario_path);

@@ -131,7 +131,7 @@ control::Config parse_controller_config(const Node& section) {
   }
   if (auto n = section.find("slip_detector")) {
     const auto kind = control::slip_detector_from_string(n->as_string());
-    if (!kind) n->fail("must be paper or field, is " + n->text());
+    if (!kind) n->fail(std::string("must be ") + control::kSlipDetectorNames + ", is " + n->text());
     cfg.slip_detector = *kind;
   }
   for (const auto& f : kDoubles) {

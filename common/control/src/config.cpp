@@ -26,12 +26,14 @@ const char* to_string(SlipDetectorKind k) {
       return "paper";
     case SlipDetectorKind::kField:
       return "field";
+    case SlipDetectorKind::kLearned:
+      return "learned";
   }
   return "?";
 }
 
 std::optional<SlipDetectorKind> slip_detector_from_string(std::string_view name) {
-  for (auto k : {SlipDetectorKind::kPaper, SlipDetectorKind::kField}) {
+  for (auto k : {SlipDetectorKind::kPaper, SlipDetectorKind::kField, SlipDetectorKind::kLearned}) {
     if (name == to_string(k)) return k;
   }
   return std::nullopt;
@@ -95,6 +97,7 @@ void Config::validate() const {
   switch (slip_detector) {
     case SlipDetectorKind::kPaper:
     case SlipDetectorKind::kField:
+    case SlipDetectorKind::kLearned:
       break;
     default:
       fail("slip_detector", static_cast<int>(slip_detector), "unknown detector");

@@ -202,7 +202,7 @@ void PhaseOneSequencer::lower_by_load(const StepInput& in, SegmentIds& ids,
 }
 
 void PhaseOneSequencer::lift(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept {
-  if (!grasp_classified_ && cfg_.slip_detector == SlipDetectorKind::kField) {
+  if (!grasp_classified_ && beyond_paper(cfg_.slip_detector)) {
     lift_by_load(in, ids, out);
     if (released_on_lift_) return;
   } else if (!grasp_classified_) {
@@ -225,7 +225,7 @@ void PhaseOneSequencer::lift(const StepInput& in, SegmentIds& ids, StepOutput& o
 // Positive slips here (deceleration, vibration) are the estimator's: re-compression. The first
 // negative one is the cap meeting the bottle or the ground.
 void PhaseOneSequencer::lower(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept {
-  if (cfg_.slip_detector == SlipDetectorKind::kField) {
+  if (beyond_paper(cfg_.slip_detector)) {
     lower_by_load(in, ids, out);
     return;
   }

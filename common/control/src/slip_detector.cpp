@@ -8,6 +8,13 @@ namespace tactile::control {
 
 namespace {
 
+// The compiled-in model of the learned detector (slip_train writes it).
+#include "slip_model.inc"
+
+static_assert(kSlipModel.features == kSlipFeatures,
+              "slip_model.inc was trained on another feature set: run slip_train again");
+static_assert(kSlipModel.depth >= 1 && kSlipModel.depth <= 8, "a tree's leaf index is 8 bits");
+
 bool usable(const ElementReading& r) {
   return r.contact && std::isfinite(r.fz) && std::isfinite(r.dx_mm) && std::isfinite(r.dy_mm) &&
          std::isfinite(r.x_px) && std::isfinite(r.y_px) && std::isfinite(r.fx) &&
@@ -64,6 +71,60 @@ RigidFit fit_rigid(const FingertipInput& in, std::size_t count, Use use) {
 }
 
 }  // namespace
+
+const std::array<const char*, kSlipFeatures> kSlipFeatureNames{"moved_dr",
+                                                               "departed_dr",
+                                                               "surface_dr",
+                                                               "load",
+                                                               "load_prev",
+                                                               "fz_n",
+                                                               "dfz_n",
+                                                               "moved_prev_dr",
+                                                               "departed_prev_dr",
+                                                               "rigid_dr",
+                                                               "rotation_dr",
+                                                               "arm_speed_mmps",
+                                                               "arm_yaw_dps",
+                                                               "share_moved",
+                                                               "share_departed",
+                                                               "total_fz_n",
+                                                               "total_dfz_rel",
+                                                               "field_reasons",
+                                                               "field_was",
+                                                               "measured",
+                                                               "dr_um",
+                                                               "mu",
+                                                               "ft_n",
+                                                               "align",
+                                                               "moved_prev2_dr",
+                                                               "dfz_prev_n",
+                                                               "arm_dr",
+                                                               "fps",
+                                                               "share_slipping",
+                                                               "share_slipping_prev"};
+
+// Summed in float, tree by tree, as the detector's batch evaluation: the same decisions.
+double SlipDetector::model_score(const SlipFeatures& x) noexcept {
+  auto score = static_cast<float>(kSlipModel.base);
+  for (std::size_t t = 0; t < kSlipModel.trees; ++t) {
+    std::size_t leaf = 0;
+    for (std::size_t d = 0; d < kSlipModel.depth; ++d) {
+      const std::size_t split = t * kSlipModel.depth + d;
+      leaf |= static_cast<std::size_t>(x[kSlipModelFeature[split]] > kSlipModelThreshold[split])
+              << d;
+    }
+    score += kSlipModelLeaf[(t << kSlipModel.depth) + leaf];
+  }
+  return static_cast<double>(score);
+}
+
+double SlipDetector::model_decision() noexcept {
+  return static_cast<double>(static_cast<float>(kSlipModel.decision));
+}
+
+std::size_t SlipDetector::model_trees() noexcept {
+  return kSlipModel.trees;
+}
 
 const char* to_string(ElementSlipState s) {
   switch (s) {
@@ -123,13 +184,19 @@ void SlipDetector::reset() noexcept {
     tip.fill(History{});
   mu_.fill(mu_initial_);
   out_.fill(FingertipSlip{});
+  total_fz_.fill(0.0);
+  last_ts_ns_.fill(0);
+  period_s_.fill(0.0);
+  share_slipping_.fill(0.0);
+  for (auto& tip : has_features_)
+    tip.fill(false);
 }
 
 const FingertipSlip& SlipDetector::update(std::size_t f, const FingertipInput& in,
                                           double threshold_mm, const ArmMotion& arm) noexcept {
   FingertipSlip& out = out_[f];
   out = FingertipSlip{};
-  if (kind_ == SlipDetectorKind::kField) out.mu_estimate = mu_[f];
+  if (kind_ != SlipDetectorKind::kPaper) out.mu_estimate = mu_[f];
   if (!in.fresh) return out;
   if (kind_ == SlipDetectorKind::kPaper) {
     decide_paper(in, threshold_mm, out);
@@ -201,6 +268,41 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
   }
   out.mu_estimate = mu;
 
+  // The fingertip's signals for the learned detector: how much of the contact moved or left the
+  // fit, and how its total normal force changed (a grip that opens or closes).
+  const bool learn = kind_ == SlipDetectorKind::kLearned;
+  auto& feats = features_[f];
+  auto& has_feats = has_features_[f];
+  has_feats.fill(false);
+  std::uint32_t n_measured = 0, n_moved = 0, n_departed = 0;
+  double total_fz = 0;
+  if (learn) {
+    for (std::size_t i = 0; i < count; ++i) {
+      const ElementReading& r = in.elements[i];
+      if (!usable(r)) continue;
+      total_fz += r.fz;
+      if (!r.has_displacement) continue;
+      ++n_measured;
+      // Squared lengths against thr^2: a count, cheaper than hypot.
+      const double thr2 = thr * thr;
+      if (r.dx_mm * r.dx_mm + r.dy_mm * r.dy_mm > thr2) ++n_moved;
+      if (fit.n >= 3) {
+        const double ex = r.dx_mm - fit.at_x(r.y_px), ey = r.dy_mm - fit.at_y(r.x_px);
+        if (ex * ex + ey * ey > thr2) ++n_departed;
+      }
+    }
+  }
+  const double last_total_fz = total_fz_[f];
+  if (learn) total_fz_[f] = total_fz;
+  // The frame period from the camera's timestamps (0 until two frames came 0-1 s apart): the
+  // arm's motion over one frame, in dr, against what the elements show.
+  const std::int64_t ts = in.camera_timestamp_ns;
+  if (ts > last_ts_ns_[f] && ts - last_ts_ns_[f] < 1'000'000'000 && last_ts_ns_[f] > 0)
+    period_s_[f] = static_cast<double>(ts - last_ts_ns_[f]) * 1e-9;
+  last_ts_ns_[f] = ts;
+  const double period = period_s_[f];
+  std::uint32_t n_field_slipping = 0;
+
   for (std::size_t i = 0; i < count; ++i) {
     const ElementReading& r = in.elements[i];
     History& h = hist[i];
@@ -211,7 +313,10 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
     const double ft = std::hypot(r.fx, r.fy);
     const double ratio = r.fz >= fn_min_n_ ? ft / r.fz : 0.0;
     if (!r.has_displacement) {
-      h = History{true, false, ratio};
+      h = History{};
+      h.valid = true;
+      h.ratio = ratio;
+      h.fz = r.fz;
       out.state[i] = ElementSlipState::kNone;
       continue;
     }
@@ -235,8 +340,56 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
     const bool dragged = was && at_edge && (contact_moves || surface > thr || arm_moves);
     const std::uint8_t why = (moved_loaded ? kSlipMoved : 0) | (left_rigid ? kSlipLeftRigid : 0) |
                              (broke ? kSlipBrokeAway : 0) | (dragged ? kSlipDragged : 0);
-    out.reasons[i] = why;
-    const bool slides = why != 0;
+    std::uint8_t reasons = why;
+    bool slides = why != 0;
+    if (learn) {
+      const double inv = thr > 0 ? 1.0 / thr : 0.0;
+      const double rx = r.x_px - fit.cx, ry = r.y_px - fit.cy;
+      const double rigid = out.rigid_mm;
+      const double align =
+          moved > 0 && rigid > 0 ? (r.dx_mm * fit.tx + r.dy_mm * fit.ty) / (moved * rigid) : 0.0;
+      const double m = mu > 0 ? 1.0 / mu : 0.0;
+      const double v[kSlipFeatures] = {
+          moved * inv,
+          departed * inv,
+          surface * inv,
+          ratio * m,
+          h.valid ? h.ratio * m : 0.0,
+          r.fz,
+          h.valid ? r.fz - h.fz : 0.0,
+          h.valid ? h.moved : 0.0,
+          h.valid ? h.departed : 0.0,
+          rigid * inv,
+          fit.n >= 3 ? std::abs(fit.w) * std::sqrt(rx * rx + ry * ry) * inv : 0.0,
+          arm.speed_mps * 1e3,
+          arm.yaw_rate_rps * (180.0 / 3.14159265358979323846),
+          n_measured > 0 ? static_cast<double>(n_moved) / n_measured : 0.0,
+          n_measured > 0 ? static_cast<double>(n_departed) / n_measured : 0.0,
+          total_fz,
+          (total_fz - last_total_fz) / std::max(last_total_fz, 0.01),
+          static_cast<double>(why),
+          was ? 1.0 : 0.0,
+          static_cast<double>(n_measured),
+          thr * 1e3,
+          mu,
+          ft,
+          align,
+          h.valid ? h.moved2 : 0.0,
+          h.valid ? h.dfz : 0.0,
+          arm.speed_mps * 1e3 * period * inv,
+          period > 0 ? 1.0 / period : 0.0,
+          0.0,  // share_slipping and share_slipping_prev: below, once every element is decided
+          0.0,
+      };
+      SlipFeatures& x = feats[i];
+      for (std::size_t k = 0; k < kSlipFeatures; ++k) {
+        const float value = static_cast<float>(v[k]);
+        x[k] = std::isfinite(value) ? value : 0.0f;
+      }
+      has_feats[i] = true;
+      if (why != 0) ++n_field_slipping;
+    }
+    out.reasons[i] = reasons;
     if (slides) {
       // Gross slip where the contact itself moves over the element (translation or rotation);
       // incipient where the element alone left a contact that sticks.
@@ -247,7 +400,68 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
     } else {
       out.state[i] = ElementSlipState::kStick;
     }
-    h = History{true, slides, ratio};
+    const double inv = thr > 0 ? 1.0 / thr : 0.0;
+    h = History{true,
+                why != 0,
+                ratio,
+                r.fz,
+                h.valid ? r.fz - h.fz : 0.0,
+                moved * inv,
+                h.valid ? h.moved : 0.0,
+                departed * inv};
+  }
+  if (!learn) return;
+
+  // The learned detector: the share of the contact the field detector decided slipping, now and
+  // in the last frame, completes the signals; then the model decides each element.
+  const double share = n_measured > 0 ? static_cast<double>(n_field_slipping) / n_measured : 0.0;
+  const double share_prev = share_slipping_[f];
+  share_slipping_[f] = share;
+  if (kSlipModel.trees == 0) return;
+  // The model over every element at once, tree by tree: the features by column, so each split
+  // compares one column with one threshold (vectorised); each element's sum in the same order as
+  // model_score, so the decisions are the same.
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!has_feats[i]) continue;
+    SlipFeatures& x = feats[i];
+    x[kSlipFeatures - 2] = static_cast<float>(share);
+    x[kSlipFeatures - 1] = static_cast<float>(share_prev);
+    for (std::size_t k = 0; k < kSlipFeatures; ++k)
+      columns_[k][n] = x[k];
+    score_[n] = static_cast<float>(kSlipModel.base);
+    ++n;
+  }
+  for (std::size_t t = 0; t < kSlipModel.trees; ++t) {
+    std::fill_n(leaf_.begin(), n, 0u);
+    for (std::size_t d = 0; d < kSlipModel.depth; ++d) {
+      const std::size_t split = t * kSlipModel.depth + d;
+      const float* column = columns_[kSlipModelFeature[split]].data();
+      const float threshold = kSlipModelThreshold[split];
+      for (std::size_t e = 0; e < n; ++e)
+        leaf_[e] |= static_cast<std::uint32_t>(column[e] > threshold) << d;
+    }
+    const float* leaves = &kSlipModelLeaf[t << kSlipModel.depth];
+    for (std::size_t e = 0; e < n; ++e)
+      score_[e] += leaves[leaf_[e]];
+  }
+  std::size_t e = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!has_feats[i]) continue;
+    const SlipFeatures& x = feats[i];
+    const bool slides = score_[e++] > static_cast<float>(kSlipModel.decision);
+    const std::uint8_t why = out.reasons[i];
+    out.reasons[i] = slides ? (why != 0 ? why : kSlipLearned) : 0;
+    if (slides) {
+      // x[0..2]: moved, departed and the surface's motion, in dr.
+      out.state[i] =
+          contact_moves || x[2] > 1.0f ? ElementSlipState::kSlip : ElementSlipState::kIncipient;
+      const double v = static_cast<double>(std::max({x[0], x[1], x[2]})) * thr;
+      out.slip_mm[i] = std::isfinite(v) ? v : 0.0;
+    } else {
+      out.state[i] = ElementSlipState::kStick;
+      out.slip_mm[i] = 0.0;
+    }
   }
 }
 

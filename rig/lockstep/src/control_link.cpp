@@ -23,7 +23,7 @@ control::Config scenario_controller_config(const Scenario& sc) {
     const auto kind = control::slip_detector_from_string(sc.slip_detector);
     if (!kind) {
       throw std::invalid_argument(sc.source + ": controller.slip_detector = " + sc.slip_detector +
-                                  ": must be paper or field");
+                                  ": must be " + control::kSlipDetectorNames);
     }
     cfg.slip_detector = *kind;
   }

@@ -162,6 +162,7 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   double done_at = 0;
   double dropped_at = -1;
   RunScorer scorer(result, cfg, opt.record_series);
+  if (opt.slip_features != nullptr) scorer.log_features(opt.slip_features);
   const Vec3 transport = transport_direction(sc.world);
 
   std::uint64_t frame = 0;

@@ -30,14 +30,23 @@ FramePose frame_pose(const World& world, Vec3 transport) {
 namespace {
 
 control::SlipDetectorKind other(control::SlipDetectorKind k) {
-  return k == control::SlipDetectorKind::kPaper ? control::SlipDetectorKind::kField
-                                                : control::SlipDetectorKind::kPaper;
+  // The learned combiner beside the rules it combines; the field detector beside the paper's.
+  switch (k) {
+    case control::SlipDetectorKind::kPaper:
+      return control::SlipDetectorKind::kField;
+    case control::SlipDetectorKind::kField:
+      return control::SlipDetectorKind::kPaper;
+    case control::SlipDetectorKind::kLearned:
+      return control::SlipDetectorKind::kField;
+  }
+  return control::SlipDetectorKind::kPaper;
 }
 
 }  // namespace
 
 RunScorer::RunScorer(LockstepResult& run, const control::Config& cfg, bool record_series)
     : run_(run),
+      cfg_(cfg),
       flags_(cfg),
       tighten_yaw_sign_(cfg.tighten_clockwise ? -1.0 : 1.0),
       record_(record_series),
@@ -139,9 +148,11 @@ void RunScorer::add_measurement(std::size_t i, std::uint64_t frame,
   control::FingertipInput measured_in;
   measured_in.elements = readings;
   measured_in.fresh = true;
+  measured_in.camera_timestamp_ns = truth.camera_timestamp_ns;
   control::FingertipInput ideal_in;
   ideal_in.elements = it.readings;
   ideal_in.fresh = true;
+  ideal_in.camera_timestamp_ns = truth.camera_timestamp_ns;
   std::array<const control::FingertipSlip*, 2> decided{};
   for (std::size_t d = 0; d < 2; ++d) {
     decided[d] = &measured_[d].update(i, measured_in, thr, arm);
@@ -152,6 +163,22 @@ void RunScorer::add_measurement(std::size_t i, std::uint64_t frame,
     }
   }
   const control::FingertipSlip& run_slip = *decided[0];
+  if (feature_log_ != nullptr) {
+    const control::FingertipSlip& rec = recorder_->update(i, measured_in, thr, arm);
+    const auto& x = recorder_->features(i);
+    const auto& has = recorder_->has_features(i);
+    for (std::size_t k = 0; k < kElementsPerFingertip && k < readings.size(); ++k) {
+      if (!has[k]) continue;
+      const bool label = truth.elements[k].sliding;
+      // moved, departed, surface (in dr) and the load (in mu): the first four signals.
+      const bool easy = !label && !control::slipping(rec.state[k]) && x[k][0] < 0.5f &&
+                        x[k][1] < 0.5f && x[k][2] < 0.5f && x[k][3] < 0.5f;
+      if (easy && easy_seen_++ % kSlipFeatureEasyStride != 0) continue;
+      feature_log_->x.push_back(x[k]);
+      feature_log_->label.push_back(label ? 1 : 0);
+      feature_log_->weight.push_back(easy ? static_cast<float>(kSlipFeatureEasyStride) : 1.0f);
+    }
+  }
 
   Latest& latest = latest_[i];
   double best = -1;
@@ -197,6 +224,11 @@ void RunScorer::add_measurement(std::size_t i, std::uint64_t frame,
     sample->slip[i] = f.slip;
     sample->over[i] = f.over;
   }
+}
+
+void RunScorer::log_features(SlipFeatureLog* log) {
+  feature_log_ = log;
+  recorder_.emplace(control::SlipDetectorKind::kLearned, cfg_);
 }
 
 void RunScorer::snapshot(double t, const char* label) {

@@ -236,7 +236,7 @@ void parse_controller(const Node& ctl, Scenario& s) {
     if (key == "slip_detector") {
       const Node n = ctl[key];
       if (!control::slip_detector_from_string(n.as_string()))
-        n.fail("must be paper or field, is " + n.text());
+        n.fail(std::string("must be ") + control::kSlipDetectorNames + ", is " + n.text());
       s.slip_detector = n.as_string();
       continue;
     }

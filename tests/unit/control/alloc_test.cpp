@@ -70,6 +70,12 @@ TEST(Allocation, UpdateWithTheFieldDetectorAllocatesNothing) {
   expect_no_allocation(cfg);
 }
 
+TEST(Allocation, UpdateWithTheLearnedDetectorAllocatesNothing) {
+  Config cfg;
+  cfg.slip_detector = SlipDetectorKind::kLearned;
+  expect_no_allocation(cfg);
+}
+
 TEST(Allocation, CounterSeesAllocations) {
   // The counter itself works: otherwise the test above proves nothing.
   tactile::testing::AllocationScope scope;

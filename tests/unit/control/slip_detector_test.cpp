@@ -208,8 +208,12 @@ TEST(FieldDetector, AFrameSeenAgainDecidesNothing) {
 }
 
 // Whatever the readings hold, the decisions and numbers stay finite and the states valid.
-TEST(FieldDetector, FiniteOnEveryInput) {
-  SlipDetector det(field_config());
+// Random readings with NaN, infinities and extremes: every output stays finite, and with `learned`
+// every signal too.
+void expect_finite_on_every_input(SlipDetectorKind kind) {
+  Config cfg;
+  cfg.slip_detector = kind;
+  SlipDetector det(cfg);
   std::mt19937_64 rng(11);
   const double specials[] = {std::numeric_limits<double>::quiet_NaN(),
                              std::numeric_limits<double>::infinity(),
@@ -238,15 +242,25 @@ TEST(FieldDetector, FiniteOnEveryInput) {
       e.x_px = pick(rng) == 0 ? value() : e.x_px;
     }
     tip.sync();
+    tip.in.camera_timestamp_ns =
+        std::int64_t{frame} * 5'000'000 + (pick(rng) == 0 ? -7'000'000 : 0);
     const ArmMotion arm{value(), value()};
-    const FingertipSlip& s = det.update(frame % 2, tip.in, kThr, arm);
+    const std::size_t f = static_cast<std::size_t>(frame % 2);
+    const FingertipSlip& s = det.update(f, tip.in, kThr, arm);
     ASSERT_TRUE(std::isfinite(s.rigid_mm)) << frame;
     ASSERT_TRUE(std::isfinite(s.mu_estimate)) << frame;
     for (std::size_t i = 0; i < kMaxSlipElements; ++i) {
       ASSERT_TRUE(std::isfinite(s.slip_mm[i])) << frame;
       ASSERT_LE(static_cast<int>(s.state[i]), static_cast<int>(ElementSlipState::kSlip));
+      if (!det.has_features(f)[i]) continue;
+      for (float v : det.features(f)[i])
+        ASSERT_TRUE(std::isfinite(v)) << frame;
     }
   }
+}
+
+TEST(FieldDetector, FiniteOnEveryInput) {
+  expect_finite_on_every_input(SlipDetectorKind::kField);
 }
 
 TEST(ArmMotionEstimator, SpeedAndYawRateFromSuccessivePoses) {
@@ -258,6 +272,71 @@ TEST(ArmMotionEstimator, SpeedAndYawRateFromSuccessivePoses) {
   // A time that does not advance keeps the last motion; a non-finite pose gives none.
   EXPECT_NEAR(est.update({{1, 1, 1}, 3.0}, 1.1).speed_mps, 0.05, 1e-12);
   EXPECT_EQ(est.update({{std::nan(""), 0, 0}, 0.0}, 1.2).speed_mps, 0.0);
+}
+
+// The learned combiner (docs/slip.md, "The learned combiner"): a trained model is compiled in,
+// and every element with signals is decided by it, score against the decision level.
+Config learned_config() {
+  Config c;
+  c.slip_detector = SlipDetectorKind::kLearned;
+  return c;
+}
+
+TEST(LearnedDetector, ATrainedModelIsCompiledIn) {
+  EXPECT_GT(SlipDetector::model_trees(), 0U) << "slip_model.inc holds no trees: run slip_train";
+  EXPECT_EQ(slip_detector_from_string("learned"), SlipDetectorKind::kLearned);
+  EXPECT_STREQ(to_string(SlipDetectorKind::kLearned), "learned");
+}
+
+TEST(LearnedDetector, DecidesEachElementByTheModelsScore) {
+  SlipDetector det(learned_config());
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::size_t decided = 0, slipped = 0;
+  for (int frame = 0; frame < 400; ++frame) {
+    // A loaded contact dragged along y, faster and slower, its grip rising and falling.
+    Tip tip(0.5 + 0.3 * std::sin(frame * 0.05), 0.2 + 0.2 * std::abs(std::sin(frame * 0.02)));
+    for (ElementReading& e : tip.r) {
+      e.dx_mm = kThr * u(rng);
+      e.dy_mm = kThr * (1.5 * std::sin(frame * 0.1) + u(rng));
+    }
+    tip.sync();
+    const FingertipSlip& s = det.update(0, tip.in, kThr, ArmMotion{0.01, 0.0});
+    const auto& x = det.features(0);
+    for (std::size_t i = 0; i < tip.r.size(); ++i) {
+      ASSERT_TRUE(det.has_features(0)[i]);
+      for (float v : x[i])
+        ASSERT_TRUE(std::isfinite(v));
+      const bool model = SlipDetector::model_score(x[i]) > SlipDetector::model_decision();
+      ASSERT_EQ(slipping(s.state[i]), model) << "frame " << frame << " element " << i;
+      ASSERT_EQ(s.reasons[i] != 0, model);
+      ++decided;
+      slipped += model ? 1 : 0;
+    }
+  }
+  // The stream holds both answers.
+  EXPECT_GT(slipped, 0U);
+  EXPECT_LT(slipped, decided);
+}
+
+// An element without contact or without a displacement has no signals and does not slip.
+TEST(LearnedDetector, NoSignalsWithoutADisplacement) {
+  SlipDetector det(learned_config());
+  Tip tip(0.5, 0.3);
+  tip.r[0].contact = false;
+  tip.r[1].has_displacement = false;
+  tip.move_all(0.0, 5 * kThr);
+  tip.sync();
+  const FingertipSlip& s = det.update(0, tip.in, kThr, {});
+  EXPECT_FALSE(det.has_features(0)[0]);
+  EXPECT_FALSE(det.has_features(0)[1]);
+  EXPECT_TRUE(det.has_features(0)[2]);
+  EXPECT_FALSE(slipping(s.state[0]));
+  EXPECT_FALSE(slipping(s.state[1]));
+}
+
+TEST(LearnedDetector, FiniteOnEveryInput) {
+  expect_finite_on_every_input(SlipDetectorKind::kLearned);
 }
 
 }  // namespace

@@ -120,7 +120,7 @@ TEST_F(HandConfigFile, AMisspeltKeyIsRefusedAtItsLineWithTheClosestKey) {
   refused("controller:\n  f1_n: 0.5\n  twist_dr_facter: 2\n",
           ":7: unknown key 'twist_dr_facter' in 'controller' (did you mean 'twist_dr_factor'?)");
   refused("controller:\n  slip_detector: fields\n",
-          ":6: key 'controller.slip_detector': must be paper or field, is 'fields'");
+          ":6: key 'controller.slip_detector': must be paper, field or learned, is 'fields'");
 }
 
 TEST_F(HandConfigFile, BadRealtimeNamesFileKeyAndValue) {

@@ -516,20 +516,22 @@ TEST(Sweep, SameSeedGivesTheSameTableWhateverTheJobCountAndEachScenarioRerunsAlo
   EXPECT_EQ(csv, read(dir / "three" / "sweep.csv"));
   EXPECT_EQ(read(dir / "one" / "summary.md"), read(dir / "three" / "summary.md"));
   EXPECT_NE(one.out.find("| precision | 3 |"), std::string::npos) << "summary on stdout";
-  EXPECT_NE(one.err.find("6/6 runs done"), std::string::npos) << "progress on stderr";
+  EXPECT_NE(one.err.find("9/9 runs done"), std::string::npos) << "progress on stderr";
   EXPECT_TRUE(fs::file_size(dir / "one" / "sweep.png") > 1000);
 
   // One row per scenario and detector, each from its own run.
   const std::vector<sweep::Row> all = sweep::parse_csv(csv, "sweep.csv");
-  ASSERT_EQ(all.size(), 6U);
+  ASSERT_EQ(all.size(), 9U);
   std::vector<sweep::Row> rows;
+  const char* methods[] = {"field", "learned", "paper"};
   for (std::size_t i = 0; i < all.size(); ++i) {
-    EXPECT_EQ(all[i].at("method"), i % 2 == 0 ? "field" : "paper");
-    EXPECT_EQ(all[i].at("index"), std::to_string(i / 2));
+    EXPECT_EQ(all[i].at("method"), methods[i % 3]);
+    EXPECT_EQ(all[i].at("index"), std::to_string(i / 3));
     EXPECT_FALSE(all[i].at("precision_without_edges").empty());
     if (all[i].at("method") == "paper") rows.push_back(all[i]);
   }
   EXPECT_NE(one.out.find("## Method `field`: 3 scenarios"), std::string::npos) << one.out;
+  EXPECT_NE(one.out.find("## Method `learned`: 3 scenarios"), std::string::npos) << one.out;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     EXPECT_EQ(rows[i].at("index"), std::to_string(i));
     EXPECT_EQ(rows[i].at("exit_status"), "0");

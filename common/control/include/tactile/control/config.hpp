@@ -18,11 +18,19 @@ enum class Task : std::uint8_t {
 };
 const char* to_string(Task t);
 
-// Which slip detector raises SLIP (docs/slip.md, "The detectors"): the paper's rule, or the field
-// detector (rigid-motion residual, friction-cone load, arm motion).
-enum class SlipDetectorKind : std::uint8_t { kPaper, kField };
+// Which slip detector raises SLIP (docs/slip.md, "The detectors"): the paper's rule, the field
+// detector (rigid-motion residual, friction-cone load, arm motion), or the learned combiner of the
+// field detector's signals (a small boosted-tree model compiled in, trained by slip_train).
+enum class SlipDetectorKind : std::uint8_t { kPaper, kField, kLearned };
 const char* to_string(SlipDetectorKind k);
+// The field and learned detectors decide Phase I's lift and lowering from the load transfer;
+// the paper's rule keeps the paper's decisions.
+inline bool beyond_paper(SlipDetectorKind k) {
+  return k != SlipDetectorKind::kPaper;
+}
 std::optional<SlipDetectorKind> slip_detector_from_string(std::string_view name);
+// The names slip_detector_from_string accepts, for error messages.
+inline constexpr const char* kSlipDetectorNames = "paper, field or learned";
 
 struct Config {
   Task task = Task::kGraspMoveTwist;

@@ -10,6 +10,11 @@
 //   estimated online from the loads it has seen break away, and the arm's reported motion that
 //   the contact's shear does not follow. Per element a state (stick, incipient, slip) with a
 //   slip velocity. No friction coefficient is configured.
+// learned: the field detector's signals (kSlipFeatureNames) for each element through a small
+//   boosted-tree model compiled in (slip_model.inc, written by slip_train from sweeps of seeds
+//   other than the benchmark's): an element slips when the model's score exceeds its decision
+//   level. The history, the friction estimate and the states' gross/incipient split stay the
+//   field detector's, so the signals do not depend on the model.
 //
 // Pure and allocation-free; every output is finite whatever the input (NaN readings count as no
 // contact). Elements beyond kMaxSlipElements of one fingertip are ignored (the sensor has 41).
@@ -65,6 +70,15 @@ inline constexpr std::uint8_t kSlipMoved = 1;
 inline constexpr std::uint8_t kSlipLeftRigid = 2;
 inline constexpr std::uint8_t kSlipBrokeAway = 4;
 inline constexpr std::uint8_t kSlipDragged = 8;
+// The learned detector decided slip where none of the field detector's rules did.
+inline constexpr std::uint8_t kSlipLearned = 16;
+
+// The learned detector's signals for one element of one fresh frame (docs/slip.md, "The learned
+// combiner"): lengths in units of the frame's threshold dr, loads in units of the friction
+// estimate. Only elements in contact with a displacement have them.
+inline constexpr std::size_t kSlipFeatures = 30;
+extern const std::array<const char*, kSlipFeatures> kSlipFeatureNames;
+using SlipFeatures = std::array<float, kSlipFeatures>;
 
 // One fingertip's decisions on its latest fresh frame.
 struct FingertipSlip {
@@ -100,12 +114,33 @@ class SlipDetector {
   const FingertipSlip& update(std::size_t fingertip, const FingertipInput& in, double threshold_mm,
                               const ArmMotion& arm) noexcept;
   const FingertipSlip& last(std::size_t fingertip) const { return out_[fingertip]; }
+  // The learned detector's signals of the latest fresh frame of `fingertip`; `has_features`
+  // tells which elements have them (kind learned only; otherwise none has).
+  const std::array<SlipFeatures, kMaxSlipElements>& features(std::size_t fingertip) const {
+    return features_[fingertip];
+  }
+  const std::array<bool, kMaxSlipElements>& has_features(std::size_t fingertip) const {
+    return has_features_[fingertip];
+  }
+  // The compiled-in model's score for `x` (the log-odds of slip) and its decision level: the
+  // learned detector decides slip when score > decision.
+  static double model_score(const SlipFeatures& x) noexcept;
+  static double model_decision() noexcept;
+  // Trees in the compiled-in model (0: none trained; learned then decides as field).
+  static std::size_t model_trees() noexcept;
 
  private:
   struct History {
     bool valid = false;
-    bool sliding = false;
+    bool sliding = false;  // the field detector's decision
     double ratio = 0;
+    // For the learned detector's signals: the last frame's F_n, its change, and the motion and
+    // departure (in dr) of the last two frames.
+    double fz = 0;
+    double dfz = 0;
+    double moved = 0;
+    double moved2 = 0;
+    double departed = 0;
   };
   void decide_paper(const FingertipInput& in, double threshold_mm, FingertipSlip& out) noexcept;
   void decide_field(std::size_t f, const FingertipInput& in, double threshold_mm,
@@ -124,6 +159,19 @@ class SlipDetector {
   // a caller feeds the two fingertips of one instant changes nothing.
   std::array<double, kFingertips> mu_{};
   std::array<FingertipSlip, kFingertips> out_{};
+  // The learned detector's per-fingertip signals of the last fresh frame: the sum of F_n, the
+  // camera timestamp and frame period, the share of the contact the field detector decided
+  // slipping.
+  std::array<double, kFingertips> total_fz_{};
+  std::array<std::int64_t, kFingertips> last_ts_ns_{};
+  std::array<double, kFingertips> period_s_{};
+  std::array<double, kFingertips> share_slipping_{};
+  // Scratch of the learned detector's batch evaluation (one frame).
+  std::array<std::array<float, kMaxSlipElements>, kSlipFeatures> columns_{};
+  std::array<float, kMaxSlipElements> score_{};
+  std::array<std::uint32_t, kMaxSlipElements> leaf_{};
+  std::array<std::array<SlipFeatures, kMaxSlipElements>, kFingertips> features_{};
+  std::array<std::array<bool, kMaxSlipElements>, kFingertips> has_features_{};
 };
 
 }  // namespace tactile::control

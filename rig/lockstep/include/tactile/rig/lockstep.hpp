@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "tactile/calibration.hpp"
+#include "tactile/control/slip_detector.hpp"
 #include "tactile/rig/scenario.hpp"
 #include "tactile/rig/truth.hpp"
 
@@ -204,10 +205,23 @@ struct RunSeries {
   std::vector<Snapshot> snapshots;
 };
 
+// The learned slip detector's training rows of one run (slip_train, docs/slip.md): each
+// element-frame of the measured frames that has the detector's signals, with the truth's label
+// and a weight. Element-frames no signal marks (every length and load below half its threshold,
+// no slip in the truth, none decided) are kept one in kSlipFeatureEasyStride, with that weight.
+inline constexpr std::uint32_t kSlipFeatureEasyStride = 8;
+struct SlipFeatureLog {
+  std::vector<control::SlipFeatures> x;
+  std::vector<std::uint8_t> label;
+  std::vector<float> weight;
+};
+
 struct LockstepOptions {
   // Physics step override (0: the scenario's); the step-size test runs with a tenth.
   double dt_s = 0;
   bool record_series = true;
+  // Collects the learned detector's training rows when set.
+  SlipFeatureLog* slip_features = nullptr;
 };
 
 struct LockstepResult {

@@ -66,6 +66,9 @@ class RunScorer {
                        std::span<const ElementReading> measured, const FingertipTruth& truth,
                        control::Phase phase, const control::ArmMotion& arm);
   void add_event(const control::Event& event, double t);
+  // From now on, the learned detector's signals of every measured frame with the truth's labels
+  // go to `log` (training, slip_train).
+  void log_features(SlipFeatureLog* log);
   // Closes the metrics.
   void finish(bool dropped, double sim_time_s, std::uint64_t frames);
 
@@ -74,6 +77,7 @@ class RunScorer {
   void snapshot(double t, const char* label);
 
   LockstepResult& run_;
+  control::Config cfg_;
   control::FlagAnalyzer flags_;
   // The wrist's turn in the tightening direction (+1: yaw increasing tightens), summed over the
   // frames' increments in that direction only (the return strokes with open fingers do not
@@ -94,6 +98,10 @@ class RunScorer {
   std::array<control::SlipDetector, 2> measured_;
   std::array<control::SlipDetector, 2> ideal_;
   std::array<SlipScorer, 2> slip_;
+  // The training rows: a learned detector on the measured frames, fed as the run's detector is.
+  SlipFeatureLog* feature_log_ = nullptr;
+  std::optional<control::SlipDetector> recorder_;
+  std::uint32_t easy_seen_ = 0;
   // The ideal sensor's readings: the truth's forces and per-frame shear displacement.
   struct IdealTip {
     std::array<ElementReading, kElementsPerFingertip> readings{};

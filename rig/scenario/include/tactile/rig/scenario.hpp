@@ -28,7 +28,7 @@ struct Scenario {
   // Controller settings the scenario overrides (names as in the `controller` section; the
   // lockstep runner maps them onto the control core's Config).
   std::vector<std::pair<std::string, double>> controller;
-  // controller.slip_detector (paper, field); empty: the control core's default.
+  // controller.slip_detector (paper, field, learned); empty: the control core's default.
   std::string slip_detector;
 
   // Physics steps per camera frame and the step that makes them fit exactly.

@@ -133,7 +133,7 @@ struct SweepOptions {
   double max_sim_time_s = 0;
   // Each scenario runs once per slip detector named here (control::to_string names), with
   // `--slip-detector NAME`: one row per scenario and detector.
-  std::vector<std::string> detectors{"paper", "field"};
+  std::vector<std::string> detectors{"paper", "field", "learned"};
   // The program run per scenario as PROGRAM --lockstep --scenario FILE --report FILE; empty: this
   // rig (/proc/self/exe).
   std::string child_program;

@@ -1,0 +1,53 @@
+#pragma once
+
+// Gradient-boosted oblivious trees for a binary label (the learned slip detector's model,
+// docs/slip.md, "The learned combiner"). Oblivious: every node of one depth of a tree splits on
+// the same feature and threshold, so a tree of depth D is D comparisons and a table of 2^D
+// leaves, evaluated without branches. Logistic loss, second-order leaf values with an L2
+// penalty, histogram splits on quantile bins. Pure and deterministic: the same rows give the
+// same model on every machine (no threads, sums in row order).
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace tactile::rig::train {
+
+struct BoostParams {
+  std::size_t trees = 64;
+  std::size_t depth = 4;  // 1..8
+  double learning_rate = 0.2;
+  double l2 = 1.0;
+  std::size_t bins = 32;  // 2..255
+  // Rows taken per feature to place the bins' borders (quantiles), evenly spaced.
+  std::size_t quantile_sample = 200000;
+};
+
+struct BoostedTrees {
+  std::size_t features = 0;
+  std::size_t depth = 0;
+  double base = 0;  // the log-odds of the weighted label mean
+  // Per tree and depth d: the split "x[feature] > threshold" sets bit d of the leaf's index.
+  std::vector<std::uint8_t> feature;
+  std::vector<float> threshold;
+  std::vector<float> leaf;  // per tree, 2^depth values
+  std::size_t trees() const { return depth == 0 ? 0 : feature.size() / depth; }
+  // The log-odds of the label for one row of `features` values.
+  double score(std::span<const float> x) const;
+};
+
+// Rows: `x` row-major (rows x features), `label` 0/1, `weight` > 0. Throws std::invalid_argument
+// for inconsistent sizes, no rows, a single class or bad parameters. `progress` (optional) is
+// called after each tree with the count done.
+BoostedTrees fit_boosted_trees(std::span<const float> x, std::size_t features,
+                               std::span<const std::uint8_t> label, std::span<const float> weight,
+                               const BoostParams& params,
+                               const std::function<void(std::size_t)>& progress = {});
+
+// The model as the C++ source slip_detector.cpp includes (slip_model.inc): `decision` is the
+// score above which an element slips, `training` a line saying how it was made.
+std::string model_source(const BoostedTrees& model, double decision, const std::string& training);
+
+}  // namespace tactile::rig::train

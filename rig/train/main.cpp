@@ -1,0 +1,236 @@
+// slip_train: trains the learned slip detector's model (docs/slip.md, "The learned combiner").
+// It draws the sweep's scenarios for each training seed, runs each in lockstep with the field
+// detector in the controller, logs every measured element-frame's signals with the truth's label,
+// fits gradient-boosted oblivious trees and writes the model as C++ source (slip_model.inc).
+// Deterministic: the same seeds and options give the same file, whatever --jobs.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tactile/cli/run.hpp"
+#include "tactile/control/slip_detector.hpp"
+#include "tactile/rig/boosted_trees.hpp"
+#include "tactile/rig/lockstep.hpp"
+#include "tactile/rig/scenario.hpp"
+#include "tactile/rig/sweep.hpp"
+#include "tactile/util/files.hpp"
+#include "tactile/util/log.hpp"
+#include "tactile/util/stop.hpp"
+
+namespace {
+
+namespace rig = tactile::rig;
+namespace control = tactile::control;
+
+struct Run {
+  std::uint64_t seed = 0;
+  std::uint64_t index = 0;
+  rig::SlipFeatureLog log;
+  std::string error;
+};
+
+// Per run, weighted counts at each decision level: precision and recall of the rows.
+struct Tally {
+  std::vector<double> tp, fp, fn;
+};
+
+std::vector<std::uint64_t> parse_seeds(const std::string& text) {
+  std::vector<std::uint64_t> seeds;
+  for (std::size_t at = 0; at <= text.size();) {
+    const std::size_t comma = std::min(text.find(',', at), text.size());
+    const std::string item = text.substr(at, comma - at);
+    std::size_t used = 0;
+    std::uint64_t v = 0;
+    try {
+      v = std::stoull(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (item.empty() || used != item.size())
+      throw tactile::cli::UsageError("--seeds must be whole numbers separated by commas; got '" +
+                                     text + "'");
+    seeds.push_back(v);
+    at = comma + 1;
+  }
+  return seeds;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const double at = q * static_cast<double>(v.size() - 1);
+  const auto lo = static_cast<std::size_t>(at);
+  const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (v[hi] - v[lo]) * (at - static_cast<double>(lo));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  tactile::util::set_program_name("slip_train");
+  std::string seeds_text = "101,102";
+  std::uint64_t scenarios = 60;
+  unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
+  std::string out = "common/control/src/slip_model.inc";
+  double max_time_s = 0;
+  rig::train::BoostParams params;
+  std::string log_level = "info";
+  CLI::App app{
+      "slip_train: trains the learned slip detector (docs/slip.md, \"The learned combiner\").\n"
+      "Runs scenarios 0..N-1 of the sweep's draw for each seed in lockstep (the field detector\n"
+      "in the controller), logs each measured element-frame's signals with the truth's label,\n"
+      "fits boosted oblivious trees and writes the model as C++ source to --out, which\n"
+      "common/control/src/slip_detector.cpp includes; rebuild to use it. Never train on the\n"
+      "seeds the benchmark sweep is scored on."};
+  app.add_option("--seeds", seeds_text, "training sweep seeds, separated by commas")
+      ->capture_default_str();
+  app.add_option("--scenarios", scenarios, "scenarios per seed")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{100000}))
+      ->capture_default_str();
+  app.add_option("--jobs", jobs, "runs at once (threads)")
+      ->check(CLI::Range(1u, 64u))
+      ->capture_default_str();
+  app.add_option("--out", out, "the model's source file")->capture_default_str();
+  app.add_option("--max-time", max_time_s, "cap each run's simulated time (s; 0: the scenario's)")
+      ->check(CLI::Range(0.0, 1e6));
+  app.add_option("--trees", params.trees, "boosting rounds")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{4096}))
+      ->capture_default_str();
+  app.add_option("--depth", params.depth, "depth of each oblivious tree")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{8}))
+      ->capture_default_str();
+  app.add_option("--learning-rate", params.learning_rate, "shrinkage of each tree")
+      ->check(CLI::Range(1e-4, 1.0))
+      ->capture_default_str();
+  tactile::cli::add_log_level(app, log_level);
+  return tactile::cli::run(app, argc, argv, [&] {
+    tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
+    const std::vector<std::uint64_t> seeds = parse_seeds(seeds_text);
+    tactile::util::install_stop_handlers();
+
+    std::vector<Run> runs;
+    for (const std::uint64_t s : seeds)
+      for (std::uint64_t i = 0; i < scenarios; ++i)
+        runs.push_back(Run{s, i, {}, {}});
+    std::atomic<std::size_t> next{0}, done{0};
+    std::mutex print;
+    const auto worker = [&] {
+      for (std::size_t k; (k = next++) < runs.size();) {
+        if (tactile::util::stop_requested()) return;
+        Run& r = runs[k];
+        try {
+          const rig::sweep::Draw d = rig::sweep::draw_scenario(r.seed, r.index);
+          rig::Scenario sc =
+              rig::parse_scenario(rig::sweep::scenario_yaml(d, max_time_s),
+                                  fmt::format("seed {} scenario {}", r.seed, r.index));
+          sc.slip_detector = "field";
+          rig::LockstepOptions opt;
+          opt.record_series = false;
+          opt.slip_features = &r.log;
+          (void)rig::run_lockstep(sc, opt);
+        } catch (const std::exception& e) {
+          r.error = e.what();
+        }
+        const std::lock_guard lock(print);
+        std::fprintf(stderr, "slip_train: run %zu/%zu (seed %llu scenario %llu): %zu rows\n",
+                     ++done, runs.size(), static_cast<unsigned long long>(r.seed),
+                     static_cast<unsigned long long>(r.index), r.log.label.size());
+      }
+    };
+    std::vector<std::thread> threads;
+    for (unsigned j = 0; j < jobs; ++j)
+      threads.emplace_back(worker);
+    for (auto& t : threads)
+      t.join();
+    if (tactile::util::stop_requested()) throw std::runtime_error("stopped before training");
+    for (const Run& r : runs) {
+      if (!r.error.empty())
+        throw std::runtime_error(fmt::format("seed {} scenario {}: {}", r.seed, r.index, r.error));
+    }
+
+    // The rows in run order, so the model does not depend on --jobs.
+    std::vector<float> x;
+    std::vector<std::uint8_t> label;
+    std::vector<float> weight;
+    for (const Run& r : runs) {
+      for (const auto& row : r.log.x)
+        x.insert(x.end(), row.begin(), row.end());
+      label.insert(label.end(), r.log.label.begin(), r.log.label.end());
+      weight.insert(weight.end(), r.log.weight.begin(), r.log.weight.end());
+    }
+    std::size_t positives = 0;
+    for (const auto l : label)
+      positives += l;
+    std::fprintf(stderr, "slip_train: %zu rows (%zu slipping), %zu features; fitting %zu trees\n",
+                 label.size(), positives, control::kSlipFeatures, params.trees);
+    const rig::train::BoostedTrees model = rig::train::fit_boosted_trees(
+        x, control::kSlipFeatures, label, weight, params, [&](std::size_t t) {
+          if (t % 8 == 0 || t == params.trees)
+            std::fprintf(stderr, "slip_train: tree %zu/%zu\n", t, params.trees);
+        });
+
+    // The decision level: the one of a grid that maximises the median plus the 5th percentile of
+    // the runs' F1 on their own rows (precision and recall per run, as the sweep scores them).
+    std::vector<double> levels;
+    for (int k = -20; k <= 20; ++k)
+      levels.push_back(0.1 * k);
+    std::vector<Tally> tallies(runs.size());
+    std::size_t row = 0;
+    for (std::size_t k = 0; k < runs.size(); ++k) {
+      Tally& t = tallies[k];
+      t.tp.assign(levels.size(), 0.0);
+      t.fp.assign(levels.size(), 0.0);
+      t.fn.assign(levels.size(), 0.0);
+      for (std::size_t n = 0; n < runs[k].log.label.size(); ++n, ++row) {
+        const double s = model.score({&x[row * control::kSlipFeatures], control::kSlipFeatures});
+        const bool y = label[row] != 0;
+        const auto w = static_cast<double>(weight[row]);
+        for (std::size_t l = 0; l < levels.size(); ++l) {
+          const bool p = s > levels[l];
+          if (p && y) t.tp[l] += w;
+          if (p && !y) t.fp[l] += w;
+          if (!p && y) t.fn[l] += w;
+        }
+      }
+    }
+    double best = -1, decision = 0;
+    std::string table;
+    for (std::size_t l = 0; l < levels.size(); ++l) {
+      std::vector<double> p, r, f1;
+      for (const Tally& t : tallies) {
+        if (t.tp[l] + t.fn[l] <= 0) continue;
+        const double pr = t.tp[l] + t.fp[l] > 0 ? t.tp[l] / (t.tp[l] + t.fp[l]) : 1.0;
+        const double re = t.tp[l] / (t.tp[l] + t.fn[l]);
+        p.push_back(pr);
+        r.push_back(re);
+        f1.push_back(pr + re > 0 ? 2 * pr * re / (pr + re) : 0.0);
+      }
+      const double value = percentile(f1, 0.5) + percentile(f1, 0.05);
+      std::fprintf(stderr,
+                   "slip_train: decision %+.1f: precision %.3f / %.3f, recall %.3f / %.3f "
+                   "(median / 5th percentile over runs)\n",
+                   levels[l], percentile(p, 0.5), percentile(p, 0.05), percentile(r, 0.5),
+                   percentile(r, 0.05));
+      if (value > best) {
+        best = value;
+        decision = levels[l];
+      }
+    }
+    const std::string training = fmt::format(
+        "slip_train --seeds {} --scenarios {} --trees {} --depth {} --learning-rate {}{}: {} "
+        "rows, decision {:.1f}",
+        seeds_text, scenarios, params.trees, params.depth, params.learning_rate,
+        max_time_s > 0 ? fmt::format(" --max-time {}", max_time_s) : std::string(), label.size(),
+        decision);
+    tactile::util::write_file_atomic(out, rig::train::model_source(model, decision, training));
+    std::fprintf(stderr, "slip_train: wrote %s (%s)\n", out.c_str(), training.c_str());
+    return 0;
+  });
+}
