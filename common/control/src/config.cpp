@@ -164,6 +164,14 @@ void Config::validate() const {
   if (ns < 1) fail("ns", ns, "must be >= 1");
   if (cycle_slip_min < 1) fail("cycle_slip_min", cycle_slip_min, "must be >= 1");
   if (max_twist_cycles < 1) fail("max_twist_cycles", max_twist_cycles, "must be >= 1");
+  positive("tight_torque_rise_nm", tight_torque_rise_nm);
+  non_negative("tight_torque_rise_ratio", tight_torque_rise_ratio);
+  positive("tight_level_s", tight_level_s);
+  positive("tight_plateau_s", tight_plateau_s);
+  non_negative("tight_plateau_fraction", tight_plateau_fraction);
+  if (!(tight_plateau_fraction < 1.0)) {
+    fail("tight_plateau_fraction", tight_plateau_fraction, "must be < 1");
+  }
 
   positive("search_timeout_s", search_timeout_s);
   positive("segment_timeout_s", segment_timeout_s);

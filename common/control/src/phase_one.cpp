@@ -123,7 +123,7 @@ SlipDirection PhaseOneSequencer::slip_direction(const StepInput& in) const {
 
 void PhaseOneSequencer::track_load(const StepInput& in) noexcept {
   for (std::size_t f = 0; f < kFingertips; ++f) {
-    if (in.fingertips[f].fresh) load_[f] = load_along_gravity(in.fingertips[f], cfg_.gravity_axis);
+    if (in.fingertips[f].fresh) load_[f] = shear_load_along(in.fingertips[f], cfg_.gravity_axis);
   }
 }
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "tactile/control/slip_direction.hpp"
+
 namespace tactile::control {
 
 // Clockwise seen from above when tighten_clockwise: the yaw decreases.
@@ -24,6 +26,7 @@ void PhaseTwoSequencer::enter(Phase p, const StepInput& in, SegmentIds& ids,
       seq_.search(t);
       break;
     case Phase::kTwistTurn: {
+      torque_.start(t);
       // The fingers keep their velocities: a slip while turning is answered by re-compression.
       const WristPose turned{reference_.position_m, turned_yaw()};
       seq_.move(MoveTo{0, "TURN", turned, cfg_.move_speed_mps, cfg_.twist_yaw_rate_rps, true}, t,
@@ -97,13 +100,32 @@ void PhaseTwoSequencer::turn(const StepInput& in, SegmentIds& ids, StepOutput& o
   for (const FingertipFlags& f : in.flags.fingertip) {
     if (f.slip) ++cycle_slips_;
   }
-  if (const char* why = tightness()) {
+  const char* why = tightness();
+  bool turned = false;
+  if (why == nullptr) {
+    turned = seq_.segment_done(in, out);
+    if (seq_.phase() != Phase::kTwistTurn) return;  // the segment timed out: ABORTED
+    if (beyond_paper(cfg_.slip_detector) && torque_stopped_building(in, turned)) {
+      why = "twist torque stopped building";
+    }
+  }
+  if (why != nullptr) {
     tight_cycle_ = seq_.cycle();
     seq_.event(EventKind::kCapTight, out, why, static_cast<double>(cycle_slips_));
     enter(Phase::kTwistFinish, in, ids, out);
-  } else if (seq_.segment_done(in, out)) {
+  } else if (turned) {
     enter(Phase::kTwistRelease, in, ids, out);
   }
+}
+
+bool PhaseTwoSequencer::torque_stopped_building(const StepInput& in, bool turned) noexcept {
+  bool fresh = false;
+  for (const FingertipInput& f : in.fingertips)
+    fresh = fresh || f.fresh;
+  // The cap resists the turn: the fingertips' torque on it points along the turn.
+  const double sign = cfg_.tighten_clockwise ? -1.0 : 1.0;
+  const double torque = sign * twist_torque_nm(in.fingertips, in.arm);
+  return torque_.update(torque, fresh, turned, in.t);
 }
 
 void PhaseTwoSequencer::returned(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept {

@@ -49,14 +49,27 @@ SlipDirection analyze_slip_direction(const std::array<FingertipInput, kFingertip
   return d;
 }
 
-double load_along_gravity(const FingertipInput& in, Vec3 gravity_axis) noexcept {
+double shear_load_along(const FingertipInput& in, Vec3 axis) noexcept {
   double load = 0;
   for (const ElementReading& r : in.elements) {
     if (!r.contact || !std::isfinite(r.fx) || !std::isfinite(r.fy)) continue;
-    const double along = gravity_axis.x * r.fx + gravity_axis.y * r.fy;
+    const double along = axis.x * r.fx + axis.y * r.fy;
     if (std::isfinite(along)) load += along;
   }
   return std::isfinite(load) ? load : 0.0;
+}
+
+double twist_torque_nm(const std::array<FingertipInput, kFingertips>& in,
+                       const ArmFeedback& arm) noexcept {
+  // x_f is -y_w on the left fingertip (at -x_w) and +y_w on the right one (at +x_w): on both the
+  // moment about +z_w of a force F along x_f is |x_w| F, and the object receives -F.
+  double torque = 0;
+  for (std::size_t f = 0; f < kFingertips; ++f) {
+    const double lever_m = std::abs(arm.fingertip_position_m[f].x);
+    if (!std::isfinite(lever_m)) return 0.0;
+    torque -= lever_m * shear_load_along(in[f], Vec3{1.0, 0.0, 0.0});
+  }
+  return std::isfinite(torque) ? torque : 0.0;
 }
 
 }  // namespace tactile::control

@@ -298,6 +298,11 @@ std::string report_json(const Report& r) {
     slip["detector"] = m.detector;
     slip["without_edges"] = precision_recall(m.precision_clear, m.recall_clear);
     slip["edge_frames"] = m.edge_frames;
+    // Nearest rank of whole frame counts; null without an episode.
+    slip["incipient_lead_frames"] =
+        m.incipient_episodes > 0 ? ordered_json(std::llround(m.incipient_lead_frames)) : nullptr;
+    slip["incipient_episodes"] = m.incipient_episodes;
+    slip["incipient_detected"] = m.incipient_detected;
     return slip;
   };
   ordered_json slip = slip_json(r.slip);

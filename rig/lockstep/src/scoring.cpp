@@ -44,6 +44,49 @@ control::SlipDetectorKind other(control::SlipDetectorKind k) {
 
 }  // namespace
 
+void IncipientLead::add(std::size_t fingertip, std::uint64_t frame, const FingertipTruth& truth,
+                        const std::array<const control::FingertipSlip*, 2>& decided,
+                        std::size_t elements) {
+  std::size_t in_contact = 0;
+  std::size_t sliding = 0;
+  for (const ElementTruth& et : truth.elements) {
+    in_contact += et.contact ? 1 : 0;
+    sliding += et.contact && et.sliding ? 1 : 0;
+  }
+  const bool gross = in_contact > 0 && 2 * sliding > in_contact;
+  const bool partial = sliding > 0 && !gross;
+  Tip& tip = tips_[fingertip];
+  if (gross && tip.in_run_up) {
+    for (std::size_t d = 0; d < 2; ++d) {
+      const auto& first = tip.first_flag[d];
+      leads_[d].push_back(first ? static_cast<double>(frame - *first) : 0.0);
+    }
+  }
+  if (!partial) {
+    tip = Tip{};
+    return;
+  }
+  tip.in_run_up = true;
+  for (std::size_t d = 0; d < 2; ++d) {
+    if (tip.first_flag[d]) continue;
+    const std::size_t n = std::min(elements, kElementsPerFingertip);
+    for (std::size_t k = 0; k < n; ++k) {
+      if (control::slipping(decided[d]->state[k])) {
+        tip.first_flag[d] = frame;
+        break;
+      }
+    }
+  }
+}
+
+void IncipientLead::finish(std::size_t d, SlipMetrics& m) const {
+  const std::vector<double>& leads = leads_[d];
+  m.incipient_lead_frames = nearest_rank_percentile(leads, 0.5);
+  m.incipient_episodes = leads.size();
+  m.incipient_detected = static_cast<std::uint64_t>(
+      std::count_if(leads.begin(), leads.end(), [](double v) { return v > 0; }));
+}
+
 RunScorer::RunScorer(LockstepResult& run, const control::Config& cfg, bool record_series)
     : run_(run),
       cfg_(cfg),
@@ -162,6 +205,7 @@ void RunScorer::add_measurement(std::size_t i, std::uint64_t frame,
                    control::slipping(ideal.state[k]), truth.elements[k], thr);
     }
   }
+  lead_.add(i, frame, truth, decided, readings.size());
   const control::FingertipSlip& run_slip = *decided[0];
   if (feature_log_ != nullptr) {
     const control::FingertipSlip& rec = recorder_->update(i, measured_in, thr, arm);
@@ -317,6 +361,8 @@ void RunScorer::finish(bool dropped, double sim_time_s, std::uint64_t frames) {
   Report& rep = run_.report;
   slip_[0].finish(rep.slip);
   slip_[1].finish(rep.slip_other);
+  lead_.finish(0, rep.slip);
+  lead_.finish(1, rep.slip_other);
   if (cap_stop_ && declared_tight_) {
     rep.tight_time_error_s = declared_tight_->t - cap_stop_->t;
     rep.tight_error_deg = declared_tight_->wrist_turn_deg - cap_stop_->wrist_turn_deg;

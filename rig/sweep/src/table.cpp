@@ -181,6 +181,9 @@ const std::vector<std::string>& columns() {
                                           "recall_without_edges",
                                           "ideal_precision_without_edges",
                                           "ideal_recall_without_edges",
+                                          "incipient_lead_frames",
+                                          "incipient_episodes",
+                                          "incipient_detected",
                                           "max_fz_N",
                                           "false_slips",
                                           "recompressions",
@@ -248,6 +251,10 @@ std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json)
   if (ideal.contains("without_edges")) {
     set("ideal_precision_without_edges", cell(need(ideal.at("without_edges"), "precision")));
     set("ideal_recall_without_edges", cell(need(ideal.at("without_edges"), "recall")));
+  }
+  // Reports from before the incipient lead have none: empty cells.
+  for (const char* key : {"incipient_lead_frames", "incipient_episodes", "incipient_detected"}) {
+    if (slip.contains(key)) set(key, cell(slip.at(key)));
   }
   set("max_fz_N", cell(need(r, "max_fz_N")));
   set("false_slips", cell(need(slip, "false_positives")));
@@ -385,8 +392,9 @@ std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info
     for (const char* score :
          {"precision", "recall", "ideal_precision", "ideal_recall", "precision_without_edges",
           "recall_without_edges", "ideal_precision_without_edges", "ideal_recall_without_edges",
-          "tight_cycle_error", "tight_time_error_s", "tight_error_deg", "max_fz_N", "false_slips",
-          "recompressions", "over_events"}) {
+          "incipient_lead_frames", "incipient_episodes", "incipient_detected", "tight_cycle_error",
+          "tight_time_error_s", "tight_error_deg", "max_fz_N", "false_slips", "recompressions",
+          "over_events"}) {
       std::vector<double> v;
       for (const Row* r : mine) {
         const double x = r->number(score);

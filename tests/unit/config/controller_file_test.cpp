@@ -30,7 +30,8 @@ TEST(ControllerFile, ReadsEveryKindOfKey) {
       "  gravity_axis: [0, -1, 0]\n"
       "  tighten_clockwise: false\n"
       "  cap_x_m: 0.3\n"
-      "  stale_after_s: 0.03\n");
+      "  stale_after_s: 0.03\n"
+      "  tight_torque_rise_nm: 0.004\n");
   EXPECT_EQ(c.task, control::Task::kGraspMoveRelease);
   EXPECT_DOUBLE_EQ(c.f1_n, 0.6);
   EXPECT_DOUBLE_EQ(c.dr_mm, 0.005);
@@ -40,6 +41,7 @@ TEST(ControllerFile, ReadsEveryKindOfKey) {
   EXPECT_FALSE(c.tighten_clockwise);
   EXPECT_DOUBLE_EQ(c.cap_x_m, 0.3);
   EXPECT_DOUBLE_EQ(c.stale_after_s, 0.03);
+  EXPECT_DOUBLE_EQ(c.tight_torque_rise_nm, 0.004);
   EXPECT_GT(controller_config_keys().size(), 30U);
 }
 
@@ -83,6 +85,7 @@ INSTANTIATE_TEST_SUITE_P(
                           {"controller.gravity_axis", "3 numbers"}},
                       Bad{"controller:\n  twist_angle_deg: 90\n  twist_angle_rad: 1\n",
                           {"twist_angle_deg", "not both"}},
+                      Bad{"controller:\n  tight_plateau_s: 0\n", {"tight_plateau_s", "0"}},
                       Bad{"controller: 5\n", {"controller", "mapping"}}));
 
 }  // namespace

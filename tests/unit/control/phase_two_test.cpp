@@ -2,10 +2,13 @@
 // sequences: the tightening rules table by table, and the paper's whole experiment.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <numbers>
 #include <ostream>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -230,6 +233,145 @@ TEST(PhaseTwo, ReleaseHappensBetweenTurnAndReturn) {
                                           CommandKind::kMoveTo /*RETREAT*/,
                                           CommandKind::kStop};
   EXPECT_EQ(arm, expected);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tightness from the twist torque (slip_detector field; docs/slip.md, "Tightness from the twist
+// torque"). The scripted cap resists every turn with its free-turn torque, read with noise; in
+// cycle `tight_cycle` it meets its stop `stop_frame` frames into the turn and the torque builds
+// for `build_frames` frames, then holds (the contact saturates) while the wrist turns on.
+
+constexpr double kFreeTorqueNm = 0.002;
+constexpr double kNoiseNm = 0.0003;  // uniform, +-: the sweep's free turn reads steady to this
+
+struct TorqueTurn {
+  int tight_cycle = 0;  // 0: the cap turns freely in every cycle
+  int stop_frame = 150;
+  int build_frames = 10;
+  double built_nm = 0.03;
+};
+
+// The torque in N m becomes a shear force on each of the 2 x 5 elements.
+double fx_for(double torque_nm) {
+  return torque_nm /
+         (2.0 * static_cast<double>(testing::kElements) * ScriptedRig::Options{}.fingertip_lever_m);
+}
+
+ScriptedRig::Script torque_turns(TorqueTurn turn, std::uint32_t seed = 20) {
+  auto rng = std::make_shared<std::mt19937>(seed);
+  return [turn, rng](ScriptedRig& rig) {
+    // Past the turn's end the fingers still hold the cap (until they open): a cap at its stop
+    // keeps pushing back.
+    if (rig.segment() != "TURN") return;
+    std::uniform_real_distribution<double> noise(-kNoiseNm, kNoiseNm);
+    double torque = kFreeTorqueNm + noise(*rng);
+    const int k = rig.segment_frames() - turn.stop_frame;
+    if (rig.segments_named("TURN") == turn.tight_cycle && k >= 0) {
+      const double built = std::min(1.0, static_cast<double>(k + 1) / turn.build_frames);
+      torque += built * (turn.built_nm - kFreeTorqueNm);
+    }
+    rig.twist_load(fx_for(torque));
+  };
+}
+
+Config torque_config(SlipDetectorKind detector) {
+  Config c = twist_config();
+  c.slip_detector = detector;
+  return c;
+}
+
+constexpr const char* kTorque = "twist torque stopped building";
+
+TEST(TwistTorque, BuildThenPlateauIsTightInThatCycle) {
+  const TorqueTurn turn{.tight_cycle = 3};
+  const Config cfg = torque_config(SlipDetectorKind::kField);
+  GraspMoveTwistController ctl(cfg);
+  ScriptedRig rig(twist_rig(), torque_turns(turn));
+  double tight_at = -1;
+  double stop_at = -1;
+  for (int i = 0; i < 20000 && !ctl.done(); ++i) {
+    const ControllerInput in = rig.next_input();
+    if (stop_at < 0 && rig.segments_named("TURN") == turn.tight_cycle && rig.segment() == "TURN" &&
+        rig.segment_frames() == turn.stop_frame) {
+      stop_at = in.now_s;
+    }
+    const ControllerOutput out = ctl.update(in);
+    for (const Event& e : out.events) {
+      if (e.kind != EventKind::kCapTight) continue;
+      tight_at = in.now_s;
+      EXPECT_EQ(e.cycle, 3U);
+      EXPECT_STREQ(e.text, kTorque);
+    }
+    rig.apply(out);
+  }
+  EXPECT_EQ(ctl.phase(), Phase::kDone);
+  EXPECT_EQ(ctl.phase_two().tight_cycle(), 3U);
+  EXPECT_EQ(rig.segments_named("TURN"), 3);
+  // Never before the stop; after it, the build (10 frames) and the plateau (tight_plateau_s).
+  ASSERT_GE(stop_at, 0.0);
+  EXPECT_GE(tight_at, stop_at + 0.01 * turn.build_frames);
+  EXPECT_LE(tight_at, stop_at + 0.01 * turn.build_frames + cfg.tight_plateau_s + 0.02);
+  // The level it rose from is the free-turn torque.
+  EXPECT_NEAR(ctl.phase_two().twist_torque().level_nm(), kFreeTorqueNm, kNoiseNm);
+}
+
+TEST(TwistTorque, FreeTurnsWithNoiseAreNeverTight) {
+  for (std::uint32_t seed : {1U, 2U, 3U}) {
+    GraspMoveTwistController ctl(torque_config(SlipDetectorKind::kField));
+    ScriptedRig rig(twist_rig(), torque_turns(TorqueTurn{}, seed));
+    const testing::Trace t = testing::run(ctl, rig);
+    EXPECT_EQ(testing::find(t.events, EventKind::kCapTight), nullptr) << "seed " << seed;
+    EXPECT_EQ(ctl.phase(), Phase::kAborted) << "seed " << seed;
+  }
+}
+
+TEST(TwistTorque, ABumpThatFallsBackIsNoStop) {
+  Config cfg = torque_config(SlipDetectorKind::kField);
+  GraspMoveTwistController ctl(cfg);
+  ScriptedRig rig(twist_rig(), [](ScriptedRig& r) {
+    if (r.segment() != "TURN" || r.segment_done()) return;
+    // Two frames at four times the free level in every turn (built by the rule's measure), then
+    // back to it.
+    const int k = r.segment_frames();
+    r.twist_load(fx_for(k == 100 || k == 101 ? 4.0 * kFreeTorqueNm : kFreeTorqueNm));
+  });
+  const testing::Trace t = testing::run(ctl, rig);
+  EXPECT_EQ(testing::find(t.events, EventKind::kCapTight), nullptr);
+  EXPECT_EQ(ctl.phase(), Phase::kAborted);
+}
+
+TEST(TwistTorque, ATurnEndingWithTheTorqueBuiltIsTight) {
+  // The stop is met a few frames before the turn's end (the wrist's 90 degrees take 314 frames
+  // at 0.5 rad/s): the torque is still building when the wrist stops.
+  const TorqueTurn turn{.tight_cycle = 2, .stop_frame = 305, .build_frames = 20};
+  GraspMoveTwistController ctl(torque_config(SlipDetectorKind::kField));
+  ScriptedRig rig(twist_rig(), torque_turns(turn));
+  const testing::Trace t = testing::run(ctl, rig);
+  const Event* tight = testing::find(t.events, EventKind::kCapTight);
+  ASSERT_NE(tight, nullptr);
+  EXPECT_EQ(tight->cycle, 2U);
+  EXPECT_STREQ(tight->text, kTorque);
+  EXPECT_EQ(ctl.phase(), Phase::kDone);
+}
+
+TEST(TwistTorque, PaperModeIgnoresTheTorque) {
+  // The same build and plateau: the paper's rule counts slips only, and none come.
+  GraspMoveTwistController ctl(torque_config(SlipDetectorKind::kPaper));
+  ScriptedRig rig(twist_rig(), torque_turns(TorqueTurn{.tight_cycle = 3}));
+  const testing::Trace t = testing::run(ctl, rig);
+  EXPECT_EQ(testing::find(t.events, EventKind::kCapTight), nullptr);
+  EXPECT_EQ(ctl.phase(), Phase::kAborted);
+}
+
+TEST(TwistTorque, TheSlipCountStillFiresFirst) {
+  // Field mode keeps the paper's count beside the torque: Ns slips before any torque builds.
+  GraspMoveTwistController ctl(torque_config(SlipDetectorKind::kField));
+  ScriptedRig rig(twist_rig(), slips_per_cycle({0, 8}, 0.01));
+  const testing::Trace t = testing::run(ctl, rig);
+  const Event* tight = testing::find(t.events, EventKind::kCapTight);
+  ASSERT_NE(tight, nullptr);
+  EXPECT_EQ(tight->cycle, 2U);
+  EXPECT_STREQ(tight->text, kNs);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -39,9 +39,10 @@ inline constexpr std::array<double, kElements> kShare{1.0, 0.3, 0.35, 0.25, 0.25
 class ScriptedRig {
  public:
   struct Options {
-    double dt_s = 0.01;               // one camera frame of both fingertips per update
-    double stiffness_n_per_mm = 3.0;  // pole force per mm of indentation
-    double initial_gap_mm = 2.0;      // fingertip to cap before the first search
+    double dt_s = 0.01;                // one camera frame of both fingertips per update
+    double stiffness_n_per_mm = 3.0;   // pole force per mm of indentation
+    double initial_gap_mm = 2.0;       // fingertip to cap before the first search
+    double fingertip_lever_m = 0.015;  // each fingertip's distance from the wrist's axis
     WristPose start{{0.35, -0.10, 0.25}, 0.0};
   };
   using Script = std::function<void(ScriptedRig&)>;
@@ -77,6 +78,10 @@ class ScriptedRig {
   void slip(std::size_t tip, std::size_t element, double dx_mm, double dy_mm) {
     injected_[tip][element] = {dx_mm, dy_mm, 1.0};
   }
+  // Shear force along x_f on every in-contact element of both fingertips in the coming frame (N):
+  // the twist torque the cap resists the turn with, fx_n * kElements * 2 * fingertip_lever_m in
+  // the clockwise direction (docs/slip.md, "Tightness from the twist torque").
+  void twist_load(double fx_n) { twist_fx_n_ = fx_n; }
   void set_stale(std::size_t tip, bool stale) { stale_[tip] = stale; }
   // The arm controller's deadman holds the wrist (no command of the controller's), until
   // `deadman_resume`, which stands for hand_node sending the current segment again.
@@ -108,6 +113,7 @@ class ScriptedRig {
         // A slipping element carries a shear load (half its normal force): what makes a
         // motion a slip for the field detector too.
         r.fy = moved ? 0.5 * r.fz : 0.0;
+        r.fx = contact ? twist_fx_n_ : 0.0;
         injected_[f][i] = {};
       }
       FingertipInput& t = in.fingertips[f];
@@ -118,7 +124,10 @@ class ScriptedRig {
       t.stale = stale_[f];
       t.fresh = fresh_[f] && !stale_[f];
     }
+    twist_fx_n_ = 0;
     in.arm.wrist = wrist_;
+    in.arm.fingertip_position_m = {Vec3{-o_.fingertip_lever_m, 0, 0},
+                                   Vec3{o_.fingertip_lever_m, 0, 0}};
     in.arm.active_segment_id = segment_.segment_id;
     in.arm.segment_done = segment_done_;
     in.arm.holding = wrist_held_ || holding_once_;
@@ -219,6 +228,7 @@ class ScriptedRig {
   std::array<std::array<ElementReading, kElements>, kFingertips> readings_{};
   std::array<Vec3, kElements> normals_{};
   std::array<std::array<Vec3, kElements>, kFingertips> injected_{};  // dx, dy, set flag
+  double twist_fx_n_ = 0;
   std::array<std::uint64_t, kFingertips> sequence_{};
   std::array<bool, kFingertips> stale_{};
   std::array<bool, kFingertips> fresh_{true, true};

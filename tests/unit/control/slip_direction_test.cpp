@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -182,6 +184,37 @@ TEST(SlipDirection, AFrameSeenBeforeClassifiesNothing) {
   const Flags flags = FlagAnalyzer(cfg).analyze(in, FingerMode::kMove, false);
   EXPECT_EQ(analyze_slip_direction(in, flags, cfg.gravity_axis, 0).classification,
             SlipClass::kNone);
+}
+
+// The twist torque about +z_w: each fingertip's shear along x_f times its distance from the axis,
+// with the sign of what the fingertips apply to the cap (x_f is -y_w on the left, +y_w on the
+// right; a reading's F is the feeler's, the cap receives -F).
+TEST(TwistTorque, IsTheMomentOfTheShearAlongXf) {
+  std::vector<ElementReading> left(3);
+  std::vector<ElementReading> right(2);
+  for (ElementReading& r : left) {
+    r.contact = true;
+    r.fx = 0.1;
+    r.fy = 5.0;  // vertical: no moment about z_w
+    r.fz = 1.0;  // toward the axis: none either
+  }
+  for (ElementReading& r : right) {
+    r.contact = true;
+    r.fx = 0.2;
+  }
+  left[2].contact = false;  // out of contact: not counted
+  std::array<FingertipInput, kFingertips> in{};
+  in[0].elements = left;
+  in[1].elements = right;
+  ArmFeedback arm;
+  arm.fingertip_position_m = {Vec3{-0.015, 0.001, 0.0}, Vec3{0.012, 0.0, 0.002}};
+  EXPECT_NEAR(twist_torque_nm(in, arm), -(0.015 * 0.2 + 0.012 * 0.4), 1e-15);
+
+  arm.fingertip_position_m[1].x = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(twist_torque_nm(in, arm), 0.0);
+  left[0].fx = std::numeric_limits<double>::infinity();  // an element's non-finite force: skipped
+  arm.fingertip_position_m[1].x = 0.012;
+  EXPECT_TRUE(std::isfinite(twist_torque_nm(in, arm)));
 }
 
 }  // namespace

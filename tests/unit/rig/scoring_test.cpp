@@ -240,6 +240,55 @@ TEST(Scoring, SeriesFlagsAreTheControllersFlags) {
   EXPECT_FALSE(s.over[1]);
 }
 
+// The incipient lead (docs/slip.md, "The incipient lead"): on fingertip 0, twelve elements in
+// contact; partial slip (3 of 12 sliding) before gross slip (10 of 12) makes an episode, and the
+// run's detector (the paper's rule) leads by the frames from its first slipping element in the
+// run-up to the onset.
+TEST(Scoring, IncipientLeadCountsFramesFromTheFirstFlagInTheRunUpToGrossSlip) {
+  const control::Config cfg;  // the paper's rule: a measured motion beyond dr is a slip
+  LockstepResult run = empty_run();
+  RunScorer scorer(run, cfg, false);
+  const auto in = [](std::uint64_t f, std::uint64_t from, std::uint64_t to) {
+    return f >= from && f <= to;
+  };
+  for (std::uint64_t frame = 1; frame <= 100; ++frame) {
+    GroundTruth gt;
+    std::array<ElementReading, kElementsPerFingertip> left{}, right{};
+    // Partial runs-up and gross onsets by the truth: episodes at 15 (flag at 12: lead 3), 34
+    // (nothing before the onset: lead 0) and 54 (flag at 52: lead 2); gross straight from stick
+    // at 70 and partial slip that never turns gross at 80-85 are no episodes.
+    const bool partial =
+        in(frame, 10, 14) || in(frame, 30, 33) || in(frame, 50, 53) || in(frame, 80, 85);
+    const bool gross = in(frame, 15, 17) || frame == 34 || in(frame, 54, 55) || in(frame, 70, 72);
+    const std::size_t sliding = gross ? 10 : partial ? 3 : 0;
+    const bool moved = frame == 12 || frame == 52 || frame == 69 || frame == 81 || frame == 34;
+    for (std::size_t k = 0; k < 12; ++k) {
+      ElementTruth& et = gt.fingertips[0].elements[k];
+      et.contact = et.visible = true;
+      et.fz_n = 0.8;
+      et.sliding = k < sliding;
+      ElementReading& r = left[k];
+      r.contact = true;
+      r.has_displacement = frame > 1;
+      r.fz = 0.8;
+      r.dy_mm = moved && k == 1 ? 10 * cfg.dr_mm : 0.0;
+    }
+    scorer.add_truth(frame, 0.01 * static_cast<double>(frame), gt, {control::Phase::kTransport, 0},
+                     {});
+    scorer.add_measurement(0, frame, left, gt.fingertips[0], control::Phase::kTransport, {});
+    scorer.add_measurement(1, frame, right, gt.fingertips[1], control::Phase::kTransport, {});
+  }
+  scorer.finish(false, 1.0, 100);
+  const SlipMetrics& m = run.report.slip;
+  ASSERT_EQ(m.detector, "paper");
+  EXPECT_EQ(m.incipient_episodes, 3U);
+  EXPECT_EQ(m.incipient_detected, 2U);
+  EXPECT_EQ(m.incipient_lead_frames, 2.0);  // the median of 3, 0 and 2
+  // The other detector is scored on the same episodes of the truth.
+  EXPECT_EQ(run.report.slip_other.incipient_episodes, 3U);
+  EXPECT_LE(run.report.slip_other.incipient_lead_frames, 5.0);  // within a run-up
+}
+
 // Fig. 10's x is the apex's position along the transport, from the cap's place to the bottle.
 TEST(Scoring, FigTenXIsAlongTheTransport) {
   WorldParams w;

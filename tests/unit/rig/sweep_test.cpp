@@ -182,6 +182,27 @@ TEST(SweepTable, TightnessTimingComesFromTheReport) {
   EXPECT_NE(summary.find("| tight_error_deg | 1 | 31.5 |"), std::string::npos) << summary;
 }
 
+// The run's detector's incipient lead fills its columns; without an episode the lead is empty.
+TEST(SweepTable, IncipientLeadComesFromTheReport) {
+  tactile::rig::Report rep;
+  rep.slip.incipient_lead_frames = 3;
+  rep.slip.incipient_episodes = 5;
+  rep.slip.incipient_detected = 4;
+  rep.slip_other.incipient_lead_frames = 1;  // the other detector's: not this row's
+  const sweep::Draw d = sweep::draw_scenario(1, 0);
+  const sweep::Row row = sweep::rows_from_report(d, tactile::rig::report_json(rep)).at(0);
+  EXPECT_EQ(row.number("incipient_lead_frames"), 3);
+  EXPECT_EQ(row.number("incipient_episodes"), 5);
+  EXPECT_EQ(row.number("incipient_detected"), 4);
+  rep.slip = {};
+  const sweep::Row none = sweep::rows_from_report(d, tactile::rig::report_json(rep)).at(0);
+  EXPECT_EQ(none.at("incipient_lead_frames"), "");
+  EXPECT_EQ(none.number("incipient_episodes"), 0);
+  const std::string summary = sweep::summary_markdown({row, none}, {});
+  EXPECT_NE(summary.find("| incipient_lead_frames | 1 | 3 |"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("| incipient_detected | 2 |"), std::string::npos) << summary;
+}
+
 // The negative cases in the table and the summary: a `case` column from the draw, the report's
 // verdict, classifications counted per case and the failed negative scenarios listed by index.
 TEST(SweepTable, NegativeCasesAreCountedPerCaseAndTheFailedListed) {

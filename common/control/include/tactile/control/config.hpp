@@ -136,6 +136,20 @@ struct Config {
   // row mean "tight". 1 is the paper's rule.
   std::uint32_t cycle_slip_min = 1;
   std::uint32_t max_twist_cycles = 8;  // safety stop
+  // With slip_detector field, tightness also from the twist torque the fingertips carry
+  // (docs/slip.md, "Tightness from the twist torque"): tight once it has built above the turn's
+  // free-turn level by tight_torque_rise_nm (and by tight_torque_rise_ratio of the level when that
+  // is more) and then stops building. The sweep's thread turns freely at 0.002 N m, measured
+  // steady to about 0.0003 N m.
+  double tight_torque_rise_nm = 0.002;
+  double tight_torque_rise_ratio = 1.0;
+  // Time constant of the free-turn level (an average over the turn); the rise is judged from three
+  // of them after the turn's start.
+  double tight_level_s = 0.1;
+  // The torque stopped building: no new peak for this long while the wrist turns (or the turn
+  // ended). A new peak exceeds the last one by tight_plateau_fraction of the built torque.
+  double tight_plateau_s = 0.02;
+  double tight_plateau_fraction = 0.05;
 
   // --- timeouts and stale data ---------------------------------------------------------------
   double search_timeout_s = 5.0;    // SEARCH without TOUCH on both fingertips: abort

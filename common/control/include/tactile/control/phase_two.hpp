@@ -7,19 +7,21 @@
 //   back)
 //
 // until the cap is tight: Ns slip detections within one cycle's turn, or slip detected in the
-// turns of two consecutive cycles. Then TWIST_FINISH: hold (stop turning), open, move clear,
-// done. max_twist_cycles without tightness ends the same way with ABORTED. No slip direction
-// analysis here; dr is scaled by twist_dr_factor.
+// turns of two consecutive cycles; with slip_detector field also the twist torque that stops
+// building in the turn (TwistTorquePlateau), whichever comes first. Then TWIST_FINISH: hold (stop
+// turning), open, move clear, done. max_twist_cycles without tightness ends the same way with
+// ABORTED. No slip direction analysis here; dr is scaled by twist_dr_factor.
 #include <cstdint>
 
 #include "tactile/control/config.hpp"
 #include "tactile/control/sequencer.hpp"
+#include "tactile/control/twist_torque.hpp"
 
 namespace tactile::control {
 
 class PhaseTwoSequencer {
  public:
-  explicit PhaseTwoSequencer(const Config& cfg) : cfg_(cfg), seq_(cfg_) {}
+  explicit PhaseTwoSequencer(const Config& cfg) : cfg_(cfg), seq_(cfg_), torque_(cfg_) {}
 
   // Enters TWIST_APPROACH toward `reference` (where the cap was released).
   void start(const WristPose& reference, const StepInput& in, SegmentIds& ids,
@@ -34,6 +36,8 @@ class PhaseTwoSequencer {
   std::uint32_t tight_cycle() const { return tight_cycle_; }
   // Slip detections counted in the current cycle's turn.
   std::uint32_t cycle_slips() const { return cycle_slips_; }
+  // The twist torque rule of the current turn (slip_detector field).
+  const TwistTorquePlateau& twist_torque() const { return torque_; }
 
  private:
   void enter(Phase p, const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
@@ -42,13 +46,17 @@ class PhaseTwoSequencer {
   void returned(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
   void let_go(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
   void retreat(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
-  // Which tightening rule the current turn meets; nullptr while none does.
+  // Which of the paper's tightening rules the current turn meets; nullptr while none does.
   const char* tightness() const;
+  // The twist torque rule's update; true once the torque stopped building (`turned`: the turn's
+  // segment is done).
+  bool torque_stopped_building(const StepInput& in, bool turned) noexcept;
   bool tight() const { return tight_cycle_ != 0; }
   double turned_yaw() const;
 
   Config cfg_;
   Sequencer seq_;
+  TwistTorquePlateau torque_;
   WristPose reference_;
   std::uint32_t cycle_slips_ = 0;
   bool previous_cycle_slipped_ = false;

@@ -30,8 +30,19 @@ SlipDirection analyze_slip_direction(const std::array<FingertipInput, kFingertip
                                      const Flags& flags, Vec3 gravity_axis,
                                      double deadband_mm) noexcept;
 
-// The shear load along gravity one fingertip carries: the sum of F_t . gravity_axis over its
-// in-contact elements with finite forces (N). Positive: the object pulls along gravity.
-double load_along_gravity(const FingertipInput& in, Vec3 gravity_axis) noexcept;
+// The shear load one fingertip carries along `axis` (fingertip frame): the sum of F_t . axis over
+// its in-contact elements with finite forces (N). Along gravity_axis, positive: the object pulls
+// along gravity.
+double shear_load_along(const FingertipInput& in, Vec3 axis) noexcept;
+
+// The twist torque the fingertips carry (N m): the moment their shear forces apply to the object
+// about the wrist's axis, +z_w (positive: counter-clockwise seen from above). x_f is horizontal
+// and tangent to the object at each fingertip (types.hpp) and a reading's F is the feeler's
+// deflection force, the opposite of what it applies: each fingertip adds minus its shear load
+// along x_f times its distance from the axis, |x_w| of ArmFeedback::fingertip_position_m. F_y
+// (vertical) and the normal forces (toward the axis) have no moment about it. 0 when a position is
+// not finite.
+double twist_torque_nm(const std::array<FingertipInput, kFingertips>& in,
+                       const ArmFeedback& arm) noexcept;
 
 }  // namespace tactile::control

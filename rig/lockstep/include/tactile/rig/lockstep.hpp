@@ -42,6 +42,12 @@ struct SlipMetrics {
   double ideal_precision_clear = 0;
   double ideal_recall_clear = 0;
   std::uint64_t edge_frames = 0;  // element-frames at an edge, truly sliding or not
+  // The incipient lead (IncipientLead, scoring.hpp): the median over the gross-slip onsets that
+  // the truth shows partial slip before (0 when there are none), their count, and how many of
+  // them the detector flagged before the onset (lead > 0).
+  double incipient_lead_frames = 0;
+  std::uint64_t incipient_episodes = 0;
+  std::uint64_t incipient_detected = 0;
 };
 
 // Latency given to an onset that no SLIP covered within its episode and two frames after.

@@ -48,6 +48,30 @@ struct ControllerState {
   std::uint32_t twist_cycle = 0;
 };
 
+// The incipient lead (docs/slip.md, "The incipient lead"), per fingertip. By the truth, a frame
+// is gross slip when more than half of the fingertip's in-contact elements slide, partial slip
+// when some slide but not that many. A gross-slip onset that follows partial-slip frames (its
+// run-up) is an episode; the detector's lead is the frames from the first frame of the run-up in
+// which it decided any element of that fingertip slipping (incipient or slip) to the onset, 0
+// when it decided none before the onset. An onset straight from stick has no run-up: no episode.
+class IncipientLead {
+ public:
+  // One frame of one fingertip (frames in order per fingertip) with each detector's decision on
+  // it: [0] the run's, [1] the other.
+  void add(std::size_t fingertip, std::uint64_t frame, const FingertipTruth& truth,
+           const std::array<const control::FingertipSlip*, 2>& decided, std::size_t elements);
+  // Detector d's median lead, episodes and detected episodes into `m`.
+  void finish(std::size_t d, SlipMetrics& m) const;
+
+ private:
+  struct Tip {
+    bool in_run_up = false;
+    std::array<std::optional<std::uint64_t>, 2> first_flag{};  // per detector, in the run-up
+  };
+  std::array<Tip, kFingertips> tips_{};
+  std::array<std::vector<double>, 2> leads_{};
+};
+
 class RunScorer {
  public:
   // Fills `run.report` and (with `record_series`) `run.series`; `run.calibrations` must be set.
@@ -102,6 +126,7 @@ class RunScorer {
   SlipFeatureLog* feature_log_ = nullptr;
   std::optional<control::SlipDetector> recorder_;
   std::uint32_t easy_seen_ = 0;
+  IncipientLead lead_;
   // The ideal sensor's readings: the truth's forces and per-frame shear displacement.
   struct IdealTip {
     std::array<ElementReading, kElementsPerFingertip> readings{};
