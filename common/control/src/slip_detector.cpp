@@ -21,6 +21,12 @@ bool usable(const ElementReading& r) {
          std::isfinite(r.fy);
 }
 
+// |(x, y)| without hypot's care for overflow and rounding (hypot costs most of the field
+// detector's time); a result that overflows is infinite, and every output is checked finite.
+inline double length(double x, double y) {
+  return std::sqrt(x * x + y * y);
+}
+
 std::size_t element_count(const FingertipInput& in) {
   return std::min(in.elements.size(), kMaxSlipElements);
 }
@@ -68,6 +74,32 @@ RigidFit fit_rigid(const FingertipInput& in, std::size_t count, Use use) {
   }
   if (den > 1e-9 && std::isfinite(num / den)) fit.w = num / den;
   return fit;
+}
+
+// The compiled-in model over `n` elements' signals by column, tree by tree: each split compares
+// one column with one threshold, which vectorises (on x86-64 a clone for AVX2 is chosen at load
+// time); each element's leaves are summed in model_score's order: the same decisions.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void score_batch(const std::array<std::array<float, kMaxSlipElements>, kSlipFeatures>& columns,
+                 std::size_t n, float* score, std::uint32_t* leaf) noexcept {
+  for (std::size_t e = 0; e < n; ++e)
+    score[e] = static_cast<float>(kSlipModel.base);
+  for (std::size_t t = 0; t < kSlipModel.trees; ++t) {
+    for (std::size_t e = 0; e < n; ++e)
+      leaf[e] = 0;
+    for (std::size_t d = 0; d < kSlipModel.depth; ++d) {
+      const std::size_t split = t * kSlipModel.depth + d;
+      const float* column = columns[kSlipModelFeature[split]].data();
+      const float threshold = kSlipModelThreshold[split];
+      for (std::size_t e = 0; e < n; ++e)
+        leaf[e] |= static_cast<std::uint32_t>(column[e] > threshold) << d;
+    }
+    const float* leaves = &kSlipModelLeaf[t << kSlipModel.depth];
+    for (std::size_t e = 0; e < n; ++e)
+      score[e] += leaves[leaf[e]];
+  }
 }
 
 }  // namespace
@@ -247,12 +279,12 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
     const auto inlier = [&](std::size_t i) {
       if (!measured(i)) return false;
       const ElementReading& r = in.elements[i];
-      return std::hypot(r.dx_mm - first.at_x(r.y_px), r.dy_mm - first.at_y(r.x_px)) <= thr;
+      return length(r.dx_mm - first.at_x(r.y_px), r.dy_mm - first.at_y(r.x_px)) <= thr;
     };
     const RigidFit second = fit_rigid(in, count, inlier);
     if (second.n >= 3) fit = second;
   }
-  out.rigid_mm = std::isfinite(std::hypot(fit.tx, fit.ty)) ? std::hypot(fit.tx, fit.ty) : 0.0;
+  out.rigid_mm = std::isfinite(length(fit.tx, fit.ty)) ? length(fit.tx, fit.ty) : 0.0;
   const bool contact_moves = out.rigid_mm > thr;
   const bool arm_moves =
       std::abs(arm.speed_mps) > arm_speed_mps_ || std::abs(arm.yaw_rate_rps) > arm_yaw_rps_;
@@ -263,7 +295,7 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
     const ElementReading& r = in.elements[i];
     const History& h = hist[i];
     if (!usable(r) || r.fz < fn_min_n_ || !h.valid) continue;
-    const double ratio = std::min(std::hypot(r.fx, r.fy) / r.fz, h.ratio);
+    const double ratio = std::min(length(r.fx, r.fy) / r.fz, h.ratio);
     if (std::isfinite(ratio) && ratio > mu && ratio < 10.0) mu = ratio;
   }
   out.mu_estimate = mu;
@@ -310,7 +342,7 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
       h = History{};
       continue;
     }
-    const double ft = std::hypot(r.fx, r.fy);
+    const double ft = length(r.fx, r.fy);
     const double ratio = r.fz >= fn_min_n_ ? ft / r.fz : 0.0;
     if (!r.has_displacement) {
       h = History{};
@@ -320,10 +352,10 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
       out.state[i] = ElementSlipState::kNone;
       continue;
     }
-    const double moved = std::hypot(r.dx_mm, r.dy_mm);
+    const double moved = length(r.dx_mm, r.dy_mm);
     const double departed =
-        fit.n >= 3 ? std::hypot(r.dx_mm - fit.at_x(r.y_px), r.dy_mm - fit.at_y(r.x_px)) : 0.0;
-    const double surface = fit.n >= 3 ? std::hypot(fit.at_x(r.y_px), fit.at_y(r.x_px)) : moved;
+        fit.n >= 3 ? length(r.dx_mm - fit.at_x(r.y_px), r.dy_mm - fit.at_y(r.x_px)) : 0.0;
+    const double surface = fit.n >= 3 ? length(fit.at_x(r.y_px), fit.at_y(r.x_px)) : moved;
     const bool loaded = ratio >= rho_ * mu;
     const bool at_edge = ratio >= edge_ * mu;
     const bool was = h.valid && h.sliding;
@@ -418,9 +450,7 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
   const double share_prev = share_slipping_[f];
   share_slipping_[f] = share;
   if (kSlipModel.trees == 0) return;
-  // The model over every element at once, tree by tree: the features by column, so each split
-  // compares one column with one threshold (vectorised); each element's sum in the same order as
-  // model_score, so the decisions are the same.
+  // The model over every element at once (score_batch).
   std::size_t n = 0;
   for (std::size_t i = 0; i < count; ++i) {
     if (!has_feats[i]) continue;
@@ -429,22 +459,9 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
     x[kSlipFeatures - 1] = static_cast<float>(share_prev);
     for (std::size_t k = 0; k < kSlipFeatures; ++k)
       columns_[k][n] = x[k];
-    score_[n] = static_cast<float>(kSlipModel.base);
     ++n;
   }
-  for (std::size_t t = 0; t < kSlipModel.trees; ++t) {
-    std::fill_n(leaf_.begin(), n, 0u);
-    for (std::size_t d = 0; d < kSlipModel.depth; ++d) {
-      const std::size_t split = t * kSlipModel.depth + d;
-      const float* column = columns_[kSlipModelFeature[split]].data();
-      const float threshold = kSlipModelThreshold[split];
-      for (std::size_t e = 0; e < n; ++e)
-        leaf_[e] |= static_cast<std::uint32_t>(column[e] > threshold) << d;
-    }
-    const float* leaves = &kSlipModelLeaf[t << kSlipModel.depth];
-    for (std::size_t e = 0; e < n; ++e)
-      score_[e] += leaves[leaf_[e]];
-  }
+  score_batch(columns_, n, score_.data(), leaf_.data());
   std::size_t e = 0;
   for (std::size_t i = 0; i < count; ++i) {
     if (!has_feats[i]) continue;
