@@ -75,12 +75,16 @@ double percentile(std::vector<double> v, double q) {
 
 int main(int argc, char** argv) {
   tactile::util::set_program_name("slip_train");
-  std::string seeds_text = "101,102";
-  std::uint64_t scenarios = 60;
+  // The defaults make the model in the repository.
+  std::string seeds_text = "101,102,103,104";
+  std::uint64_t scenarios = 80;
   unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
   std::string out = "common/control/src/slip_model.inc";
   double max_time_s = 0;
   rig::train::BoostParams params;
+  params.trees = 48;
+  params.depth = 5;
+  params.learning_rate = 0.25;
   std::string log_level = "info";
   CLI::App app{
       "slip_train: trains the learned slip detector (docs/slip.md, \"The learned combiner\").\n"

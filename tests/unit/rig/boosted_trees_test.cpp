@@ -113,7 +113,7 @@ TEST(SlipTrain, TheModelDoesNotDependOnTheJobs) {
   const testing::TempDir dir;
   const auto train = [&](const char* jobs, const std::string& out) {
     return testing::run({TACTILE_SLIP_TRAIN_PATH, "--seeds", "5", "--scenarios", "2", "--max-time",
-                         "6", "--trees", "4", "--jobs", jobs, "--out", out},
+                         "6", "--trees", "4", "--depth", "4", "--jobs", jobs, "--out", out},
                         std::chrono::seconds(120));
   };
   const std::string a = (dir.path() / "a.inc").string();
