@@ -79,7 +79,9 @@ RigidFit fit_rigid(const FingertipInput& in, std::size_t count, Use use) {
 // The compiled-in model over `n` elements' signals by column, tree by tree: each split compares
 // one column with one threshold, which vectorises (on x86-64 a clone for AVX2 is chosen at load
 // time); each element's leaves are summed in model_score's order: the same decisions.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+// Not under AddressSanitizer: the clone's resolver runs before the sanitizer's start-up.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
+    !defined(__SANITIZE_ADDRESS__)
 __attribute__((target_clones("avx2", "default")))
 #endif
 void score_batch(const std::array<std::array<float, kMaxSlipElements>, kSlipFeatures>& columns,
