@@ -96,9 +96,14 @@ const char* PhaseTwoSequencer::tightness() const {
 }
 
 void PhaseTwoSequencer::turn(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept {
-  // A detection is one fresh frame of one fingertip with SLIP raised (docs/control.md).
+  // A detection is one fresh frame of one fingertip with SLIP raised (docs/control.md); with the
+  // field and learned detectors, on at least kTwistSlipElements elements: they decide each
+  // element from more signals than its motion, and a single element's false slip in each of two
+  // turns would declare a free-turning cap tight by the two-cycle rule.
   for (const FingertipFlags& f : in.flags.fingertip) {
-    if (f.slip) ++cycle_slips_;
+    const bool counts =
+        f.slip && (!beyond_paper(cfg_.slip_detector) || f.slipping_elements >= kTwistSlipElements);
+    if (counts) ++cycle_slips_;
   }
   const char* why = tightness();
   bool turned = false;

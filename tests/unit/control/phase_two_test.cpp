@@ -39,13 +39,19 @@ ScriptedRig::Options twist_rig() {
 
 // Slip detections injected into the turn of each cycle: `count[k]` frames of fingertip 0,
 // spread 10 frames apart (each its own re-compression), of `magnitude_mm` per frame.
-ScriptedRig::Script slips_per_cycle(std::vector<int> count, double magnitude_mm = 0.01) {
-  return [count, magnitude_mm](ScriptedRig& rig) {
+// `count[c]` detections in cycle c + 1's turn, each a slip of `elements` elements of fingertip 0
+// in one frame (two by default: a contact's slip, which every detector counts).
+ScriptedRig::Script slips_per_cycle(std::vector<int> count, double magnitude_mm = 0.01,
+                                    std::size_t elements = 2) {
+  return [count, magnitude_mm, elements](ScriptedRig& rig) {
     if (rig.segment() != "TURN" || rig.segment_done()) return;
     const auto cycle = static_cast<std::size_t>(rig.segments_named("TURN"));
     if (cycle == 0 || cycle > count.size()) return;
     const int k = rig.segment_frames() - 20;
-    if (k >= 0 && k % 10 == 0 && k / 10 < count[cycle - 1]) rig.slip(0, 0, 0.0, magnitude_mm);
+    if (k >= 0 && k % 10 == 0 && k / 10 < count[cycle - 1]) {
+      for (std::size_t e = 0; e < elements; ++e)
+        rig.slip(0, e, 0.0, magnitude_mm);
+    }
   };
 }
 
@@ -372,6 +378,24 @@ TEST(TwistTorque, TheSlipCountStillFiresFirst) {
   ASSERT_NE(tight, nullptr);
   EXPECT_EQ(tight->cycle, 2U);
   EXPECT_STREQ(tight->text, kNs);
+}
+
+// With the field and learned detectors one element's slip is no turn's slip: a single element in
+// one frame of each of two consecutive turns does not make a free-turning cap tight (the paper's
+// rule counts it: `PaperRules/Tightening`).
+TEST(TwistSlipCount, OneElementInTwoConsecutiveTurnsIsNotTightBeyondThePaper) {
+  // The learned detector takes the same path (beyond_paper); its model decides these scripted
+  // frames' elements its own way, so the field detector stands for both here.
+  GraspMoveTwistController ctl(torque_config(SlipDetectorKind::kField));
+  ScriptedRig field_rig(twist_rig(), slips_per_cycle({1, 1, 1}, 0.01, 1));
+  const testing::Trace field = testing::run(ctl, field_rig);
+  EXPECT_EQ(testing::find(field.events, EventKind::kCapTight), nullptr);
+  GraspMoveTwistController paper(torque_config(SlipDetectorKind::kPaper));
+  ScriptedRig rig(twist_rig(), slips_per_cycle({1, 1, 1}, 0.01, 1));
+  const testing::Trace t = testing::run(paper, rig);
+  const Event* tight = testing::find(t.events, EventKind::kCapTight);
+  ASSERT_NE(tight, nullptr);
+  EXPECT_EQ(tight->cycle, 2U);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -19,6 +19,10 @@
 
 namespace tactile::control {
 
+// With the field and learned detectors a turn's slip detection needs this many slipping elements
+// on the fingertip (the paper's rule counts any SLIP).
+inline constexpr std::uint32_t kTwistSlipElements = 2;
+
 class PhaseTwoSequencer {
  public:
   explicit PhaseTwoSequencer(const Config& cfg) : cfg_(cfg), seq_(cfg_), torque_(cfg_) {}
