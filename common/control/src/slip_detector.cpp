@@ -13,7 +13,7 @@ namespace {
 
 static_assert(kSlipModel.features == kSlipFeatures,
               "slip_model.inc was trained on another feature set: run slip_train again");
-static_assert(kSlipModel.depth >= 1 && kSlipModel.depth <= 8, "a tree's leaf index is 8 bits");
+static_assert(kSlipModel.depth >= 1 && kSlipModel.depth <= 8, "slip_train fits depths 1 to 8");
 
 bool usable(const ElementReading& r) {
   return r.contact && std::isfinite(r.fz) && std::isfinite(r.dx_mm) && std::isfinite(r.dy_mm) &&
@@ -336,6 +336,7 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
   last_ts_ns_[f] = ts;
   const double period = period_s_[f];
   std::uint32_t n_field_slipping = 0;
+  const double inv = thr > 0 ? 1.0 / thr : 0.0;  // lengths in units of thr
 
   for (std::size_t i = 0; i < count; ++i) {
     const ElementReading& r = in.elements[i];
@@ -374,10 +375,8 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
     const bool dragged = was && at_edge && (contact_moves || surface > thr || arm_moves);
     const std::uint8_t why = (moved_loaded ? kSlipMoved : 0) | (left_rigid ? kSlipLeftRigid : 0) |
                              (broke ? kSlipBrokeAway : 0) | (dragged ? kSlipDragged : 0);
-    std::uint8_t reasons = why;
-    bool slides = why != 0;
+    const bool slides = why != 0;
     if (learn) {
-      const double inv = thr > 0 ? 1.0 / thr : 0.0;
       const double rx = r.x_px - fit.cx, ry = r.y_px - fit.cy;
       const double rigid = out.rigid_mm;
       const double align =
@@ -423,7 +422,7 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
       has_feats[i] = true;
       if (why != 0) ++n_field_slipping;
     }
-    out.reasons[i] = reasons;
+    out.reasons[i] = why;
     if (slides) {
       // Gross slip where the contact itself moves over the element (translation or rotation);
       // incipient where the element alone left a contact that sticks.
@@ -434,7 +433,6 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
     } else {
       out.state[i] = ElementSlipState::kStick;
     }
-    const double inv = thr > 0 ? 1.0 / thr : 0.0;
     h = History{true,
                 why != 0,
                 ratio,
