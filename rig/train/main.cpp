@@ -172,10 +172,17 @@ int main(int argc, char** argv) {
     std::size_t positives = 0;
     for (const auto l : label)
       positives += l;
+    // The fit's weights: each run weighs as much as the mean run (within a factor of 8), since
+    // the sweep scores each run's precision and recall, not the pooled rows: a 60 fps run logs a
+    // sixth of a 400 fps run's rows and would otherwise hardly move the fit.
+    std::vector<std::size_t> run_rows;
+    for (const Run& r : runs)
+      run_rows.push_back(r.log.label.size());
+    const std::vector<float> fit_weight = rig::train::balance_runs(weight, run_rows, 8.0);
     std::fprintf(stderr, "slip_train: %zu rows (%zu slipping), %zu features; fitting %zu trees\n",
                  label.size(), positives, control::kSlipFeatures, params.trees);
     const rig::train::BoostedTrees model = rig::train::fit_boosted_trees(
-        x, control::kSlipFeatures, label, weight, params, [&](std::size_t t) {
+        x, control::kSlipFeatures, label, fit_weight, params, [&](std::size_t t) {
           if (t % 8 == 0 || t == params.trees)
             std::fprintf(stderr, "slip_train: tree %zu/%zu\n", t, params.trees);
         });

@@ -208,14 +208,16 @@ void RunScorer::add_measurement(std::size_t i, std::uint64_t frame,
   lead_.add(i, frame, truth, decided, readings.size());
   const control::FingertipSlip& run_slip = *decided[0];
   if (feature_log_ != nullptr) {
-    const control::FingertipSlip& rec = recorder_->update(i, measured_in, thr, arm);
+    (void)recorder_->update(i, measured_in, thr, arm);  // its signals, below
     const auto& x = recorder_->features(i);
     const auto& has = recorder_->has_features(i);
     for (std::size_t k = 0; k < kElementsPerFingertip && k < readings.size(); ++k) {
       if (!has[k]) continue;
       const bool label = truth.elements[k].sliding;
-      // moved, departed, surface (in dr) and the load (in mu): the first four signals.
-      const bool easy = !label && !control::slipping(rec.state[k]) && x[k][0] < 0.5f &&
+      // moved, departed, surface (in dr) and the load (in mu): the first four signals; the
+      // field rules' reasons (kSlipFeatureReasons), not the compiled-in model's decision, so
+      // the rows do not depend on the model being replaced.
+      const bool easy = !label && x[k][control::kSlipFeatureReasons] == 0.0f && x[k][0] < 0.5f &&
                         x[k][1] < 0.5f && x[k][2] < 0.5f && x[k][3] < 0.5f;
       if (easy && easy_seen_++ % kSlipFeatureEasyStride != 0) continue;
       feature_log_->x.push_back(x[k]);

@@ -166,6 +166,30 @@ BoostedTrees fit_boosted_trees(std::span<const float> x, std::size_t features,
   return m;
 }
 
+std::vector<float> balance_runs(std::span<const float> weight,
+                                std::span<const std::size_t> run_rows, double max_scale) {
+  std::size_t rows = 0;
+  for (const std::size_t n : run_rows)
+    rows += n;
+  if (rows != weight.size() || !(max_scale >= 1.0))
+    throw std::invalid_argument("balance_runs: the runs' rows do not add up to the weights'");
+  std::vector<double> sums(run_rows.size(), 0.0);
+  double total = 0;
+  for (std::size_t k = 0, at = 0; k < run_rows.size(); ++k) {
+    for (std::size_t n = 0; n < run_rows[k]; ++n, ++at)
+      sums[k] += static_cast<double>(weight[at]);
+    total += sums[k];
+  }
+  const double mean = run_rows.empty() ? 0.0 : total / static_cast<double>(run_rows.size());
+  std::vector<float> out(weight.begin(), weight.end());
+  for (std::size_t k = 0, at = 0; k < run_rows.size(); ++k) {
+    const double scale = sums[k] > 0 ? std::clamp(mean / sums[k], 1.0 / max_scale, max_scale) : 1.0;
+    for (std::size_t n = 0; n < run_rows[k]; ++n, ++at)
+      out[at] = static_cast<float>(static_cast<double>(weight[at]) * scale);
+  }
+  return out;
+}
+
 std::string model_source(const BoostedTrees& m, double decision, const std::string& training) {
   std::string s;
   s +=

@@ -283,6 +283,7 @@ Config learned_config() {
 }
 
 TEST(LearnedDetector, ATrainedModelIsCompiledIn) {
+  EXPECT_STREQ(kSlipFeatureNames[kSlipFeatureReasons], "field_reasons");
   EXPECT_GT(SlipDetector::model_trees(), 0U) << "slip_model.inc holds no trees: run slip_train";
   EXPECT_EQ(slip_detector_from_string("learned"), SlipDetectorKind::kLearned);
   EXPECT_STREQ(to_string(SlipDetectorKind::kLearned), "learned");
@@ -290,6 +291,7 @@ TEST(LearnedDetector, ATrainedModelIsCompiledIn) {
 
 TEST(LearnedDetector, DecidesEachElementByTheModelsScore) {
   SlipDetector det(learned_config());
+  SlipDetector field(field_config());  // fed the same frames: its rules are among the signals
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1, 1);
   std::size_t decided = 0, slipped = 0;
@@ -302,9 +304,13 @@ TEST(LearnedDetector, DecidesEachElementByTheModelsScore) {
     }
     tip.sync();
     const FingertipSlip& s = det.update(0, tip.in, kThr, ArmMotion{0.01, 0.0});
+    const FingertipSlip& rules = field.update(0, tip.in, kThr, ArmMotion{0.01, 0.0});
     const auto& x = det.features(0);
     for (std::size_t i = 0; i < tip.r.size(); ++i) {
       ASSERT_TRUE(det.has_features(0)[i]);
+      // The field rules' reasons, not the model's: slip_train's rows do not depend on the model.
+      ASSERT_EQ(x[i][kSlipFeatureReasons], static_cast<float>(rules.reasons[i]))
+          << "frame " << frame << " element " << i;
       for (float v : x[i])
         ASSERT_TRUE(std::isfinite(v));
       const bool model = SlipDetector::model_score(x[i]) > SlipDetector::model_decision();

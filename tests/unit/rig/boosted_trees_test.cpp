@@ -107,6 +107,29 @@ TEST(BoostedTrees, SourceStatesEveryTreeAndTheDecision) {
   EXPECT_NE(src.find("\"test \\\"model\\\"\""), std::string::npos) << src;
 }
 
+// Each run weighs as much as the mean run, within the bound; the rows of one run keep their ratios.
+TEST(BoostedTrees, BalanceRunsWeighsEachRunAsTheMeanRun) {
+  // Run 0: 2 rows of 1; run 1: 6 rows, one of weight 8 (a kept easy row); run 2: no rows.
+  const std::vector<float> w{1, 1, 1, 1, 1, 1, 1, 8};
+  const std::vector<std::size_t> rows{2, 6, 0};
+  // Totals 2 and 13; the mean over the three runs is 5.
+  const std::vector<float> b = balance_runs(w, rows, 100.0);
+  ASSERT_EQ(b.size(), w.size());
+  EXPECT_FLOAT_EQ(b[0] + b[1], 5.0f);
+  float second = 0;
+  for (std::size_t i = 2; i < 8; ++i)
+    second += b[i];
+  EXPECT_FLOAT_EQ(second, 5.0f);
+  EXPECT_FLOAT_EQ(b[7] / b[2], 8.0f);
+  // Within a factor 2 either way: run 0 doubles, run 1 halves.
+  const std::vector<float> c = balance_runs(w, rows, 2.0);
+  EXPECT_FLOAT_EQ(c[0], 2.0f);
+  EXPECT_FLOAT_EQ(c[2], 0.5f);
+  EXPECT_FLOAT_EQ(c[7], 4.0f);
+  EXPECT_THROW(balance_runs(w, std::vector<std::size_t>{2, 5}, 2.0), std::invalid_argument);
+  EXPECT_THROW(balance_runs(w, rows, 0.5), std::invalid_argument);
+}
+
 // slip_train over real lockstep runs: two short runs of one seed, once with one thread and once
 // with two, give the same file byte for byte.
 TEST(SlipTrain, TheModelDoesNotDependOnTheJobs) {

@@ -79,6 +79,8 @@ inline constexpr std::uint8_t kSlipLearned = 16;
 inline constexpr std::size_t kSlipFeatures = 30;
 extern const std::array<const char*, kSlipFeatures> kSlipFeatureNames;
 using SlipFeatures = std::array<float, kSlipFeatures>;
+// The signal that holds the field rules' reasons (kSlip* bits) for the element.
+inline constexpr std::size_t kSlipFeatureReasons = 17;
 
 // One fingertip's decisions on its latest fresh frame.
 struct FingertipSlip {

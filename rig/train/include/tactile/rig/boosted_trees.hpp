@@ -46,6 +46,12 @@ BoostedTrees fit_boosted_trees(std::span<const float> x, std::size_t features,
                                const BoostParams& params,
                                const std::function<void(std::size_t)>& progress = {});
 
+// The fit's weights for rows that come from runs scored one by one (the sweep's precision and
+// recall per run): run k's `run_rows[k]` rows, in order, scaled so that their total weight is the
+// mean run's, within a factor `max_scale` either way. A run of no weight keeps its rows'.
+std::vector<float> balance_runs(std::span<const float> weight,
+                                std::span<const std::size_t> run_rows, double max_scale);
+
 // The model as the C++ source slip_detector.cpp includes (slip_model.inc): `decision` is the
 // score above which an element slips, `training` a line saying how it was made.
 std::string model_source(const BoostedTrees& model, double decision, const std::string& training);
