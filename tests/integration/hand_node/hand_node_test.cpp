@@ -219,6 +219,9 @@ class HandNodeRun {
                                       << "\n"
                                          "controller:\n"
                                          "  stale_after_s: 0.03\n"
+                                         // The scripts inject the paper's slips (one element
+                                         // moving beyond dr) and no load transfer.
+                                         "  slip_detector: paper\n"
                                       << controller_yaml;
   }
 

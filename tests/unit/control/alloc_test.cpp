@@ -69,8 +69,10 @@ std::string expect_no_allocation(const Config& cfg) {
   return tight_text;
 }
 
-TEST(Allocation, UpdateAllocatesNothing) {
-  EXPECT_EQ(expect_no_allocation(Config{}), "Ns slip detections in one cycle");
+TEST(Allocation, UpdateWithThePapersRuleAllocatesNothing) {
+  Config cfg;
+  cfg.slip_detector = SlipDetectorKind::kPaper;
+  EXPECT_EQ(expect_no_allocation(cfg), "Ns slip detections in one cycle");
 }
 
 TEST(Allocation, UpdateWithTheFieldDetectorAllocatesNothing) {

@@ -29,7 +29,7 @@ void bottle(ScriptedRig& rig) {
 }
 
 Config phase_one_config() {
-  Config c;
+  Config c = testing::paper_config();
   c.task = Task::kGraspMoveRelease;
   return c;
 }
@@ -247,7 +247,7 @@ TEST(Controller, StaleFromTheStartHoldsThenStarts) {
 }
 
 TEST(Controller, FingerVelocitiesAreSentOnlyWhenTheyChange) {
-  GraspMoveTwistController ctl{Config{}};
+  GraspMoveTwistController ctl{testing::paper_config()};
   ScriptedRig rig({}, [](ScriptedRig& r) {
     if (r.segment() == "MOVE4" && r.segment_frames() % 7 == 0) r.slip(0, 0, 0, 0.01);
     bottle(r);
@@ -437,7 +437,7 @@ void expect_sane(const ControllerOutput& out, const Config& cfg, bool placed,
 TEST(ControllerRandomized, GarbageInFiniteAndBoundedOut) {
   for (std::uint64_t seed : {1U, 2U, 3U, 4U, 5U, 6U, 7U, 8U}) {
     util::Random rng(seed);
-    Config cfg;
+    Config cfg = testing::paper_config();
     cfg.task = static_cast<Task>(seed % 3);
     cfg.search_timeout_s = 0.2;
     cfg.segment_timeout_s = 0.5;
@@ -494,7 +494,7 @@ TEST(ControllerRandomized, GarbageInFiniteAndBoundedOut) {
 TEST(ControllerRandomized, RandomSlipsKeepTheSequenceWellFormed) {
   for (std::uint64_t seed = 11; seed < 31; ++seed) {
     util::Random rng(seed);
-    Config cfg;
+    Config cfg = testing::paper_config();
     cfg.task = seed % 2 == 0 ? Task::kGraspMoveTwist : Task::kTwistOnly;
     cfg.max_twist_cycles = 4;
     const double p = rng.uniform(0.0, 0.2);  // slip probability per element and frame

@@ -18,7 +18,7 @@ using testing::ScriptedRig;
 constexpr double kBottleTopZ = 0.15;
 
 Config phase_one_config() {
-  Config c;
+  Config c = testing::paper_config();
   c.task = Task::kGraspMoveRelease;
   return c;
 }

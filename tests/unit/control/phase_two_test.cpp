@@ -25,7 +25,7 @@ constexpr double kBottleTopZ = 0.15;
 
 // Twisting where the hand is, softer contact so that repeated re-compressions stay under F2.
 Config twist_config() {
-  Config c;
+  Config c = testing::paper_config();
   c.task = Task::kTwistOnly;
   c.max_twist_cycles = 6;
   return c;
@@ -430,7 +430,7 @@ void paper_experiment(ScriptedRig& rig) {
 }
 
 TEST(PaperExperiment, GraspMoveTwistEmitsThePapersDecisionsInOrder) {
-  GraspMoveTwistController ctl(Config{});
+  GraspMoveTwistController ctl(testing::paper_config());
   ScriptedRig rig({}, paper_experiment);
   const testing::Trace t = testing::run(ctl, rig);
   const std::vector<std::string> expected{
@@ -497,7 +497,7 @@ TEST(PaperExperiment, GraspMoveTwistEmitsThePapersDecisionsInOrder) {
 
   // Phase II twists at the reference coordinate of the release: above the bottle, at the height
   // where the cap met it.
-  const Config cfg;
+  const Config cfg = testing::paper_config();
   for (const Command& c : t.commands) {
     if (c.kind == CommandKind::kMoveTo && std::strcmp(c.move_to.name, "TWIST0") == 0) {
       EXPECT_DOUBLE_EQ(c.move_to.target.position_m.x, cfg.bottle_x_m);

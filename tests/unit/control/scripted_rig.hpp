@@ -24,6 +24,15 @@ namespace tactile::control::testing {
 
 inline constexpr std::size_t kElements = 5;
 
+// The scripts replay the paper's experiment for the paper's slip rule: an injected slip is one
+// element's motion beyond dr, which is all that rule reads (the field and learned detectors, the
+// default, read the whole contact's motion and load: slip_detector_test.cpp).
+inline Config paper_config() {
+  Config c;
+  c.slip_detector = SlipDetectorKind::kPaper;
+  return c;
+}
+
 // The test fingertip: element 0 at the dome's pole, 1 above it (toward -y_f, up), 2 below it
 // (toward +y_f, down), 3 toward -x_f, 4 toward +x_f, each 30 degrees off the pole. The normal is
 // the inward normal at the element: where pushing presses it harder.

@@ -58,10 +58,13 @@ TEST_F(HandConfigFile, PairWindowDefaultsOnAndIsRead) {
   EXPECT_TRUE(warnings.empty()) << warnings.front();
 }
 
-// The slip detector is the paper's rule unless the configuration names another.
-TEST_F(HandConfigFile, SlipDetectorDefaultsToThePapersRuleAndIsRead) {
+// The slip detector is the learned combiner unless the configuration names another.
+TEST_F(HandConfigFile, SlipDetectorDefaultsToTheLearnedCombinerAndIsRead) {
   std::vector<std::string> warnings;
   EXPECT_EQ(load_hand_config(write(""), &warnings).controller.slip_detector,
+            control::SlipDetectorKind::kLearned);
+  EXPECT_EQ(load_hand_config(write("controller:\n  slip_detector: paper\n"), &warnings)
+                .controller.slip_detector,
             control::SlipDetectorKind::kPaper);
   const auto field =
       load_hand_config(write("controller:\n  slip_detector: field\n  field_edge_ratio: 0.6\n"),

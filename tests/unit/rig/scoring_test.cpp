@@ -218,6 +218,7 @@ TEST(Scoring, LockstepAndRealTimeOrderGiveTheSameMetrics) {
 // measured frame: TOUCH for F_z above F1 or a slip, OVER above F2.
 TEST(Scoring, SeriesFlagsAreTheControllersFlags) {
   control::Config cfg;
+  cfg.slip_detector = control::SlipDetectorKind::kPaper;  // one element beyond dr: SLIP
   LockstepResult run = empty_run();
   RunScorer scorer(run, cfg, true);
   GroundTruth gt;
@@ -245,7 +246,8 @@ TEST(Scoring, SeriesFlagsAreTheControllersFlags) {
 // run's detector (the paper's rule) leads by the frames from its first slipping element in the
 // run-up to the onset.
 TEST(Scoring, IncipientLeadCountsFramesFromTheFirstFlagInTheRunUpToGrossSlip) {
-  const control::Config cfg;  // the paper's rule: a measured motion beyond dr is a slip
+  control::Config cfg;
+  cfg.slip_detector = control::SlipDetectorKind::kPaper;  // a measured motion beyond dr: a slip
   LockstepResult run = empty_run();
   RunScorer scorer(run, cfg, false);
   const auto in = [](std::uint64_t f, std::uint64_t from, std::uint64_t to) {

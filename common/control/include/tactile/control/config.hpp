@@ -49,9 +49,10 @@ struct Config {
   // The gravity direction in the fingertip frame when the hand is upright. Only its x and y
   // components act: the displacement has none along z_f.
   Vec3 gravity_axis{0.0, 1.0, 0.0};
-  // The slip detector: kPaper is the paper's rule (an element slips when its centroid moves more
-  // than dr in a frame).
-  SlipDetectorKind slip_detector = SlipDetectorKind::kPaper;
+  // The slip detector: kLearned, the learned combiner of the field detector's signals, wins on
+  // the sweep (docs/slip.md, "Results"); kPaper is the paper's rule (an element slips when its
+  // centroid moves more than dr in a frame) and reproduces the paper's experiment.
+  SlipDetectorKind slip_detector = SlipDetectorKind::kLearned;
   // The field detector's parameters (docs/slip.md). An element moving more than dr counts as
   // slipping only when loaded beyond this fraction of the friction estimate (Cattaneo-Mindlin
   // partial slip), or when it was slipping.
