@@ -57,6 +57,8 @@ int run(int argc, char** argv) {
       case tactile::hand::Outcome::kAborted:
         tactile::util::log_error("task aborted");
         return 3;
+      case tactile::hand::Outcome::kArmLost:  // HandNode said why, in one line
+        return 4;
     }
     return 0;
   });

@@ -1,5 +1,7 @@
 #include "hand_config.hpp"
 
+#include <fmt/format.h>
+
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/config/controller_file.hpp"
 #include "tactile/config/realtime_section.hpp"
@@ -11,7 +13,7 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
   const config::Node root = config::load_yaml_file(path);
   if (!root.is_map()) root.fail("a hand_node configuration must be a YAML mapping");
   root.refuse_unknown_keys({"format", "fingertips", "subscribe", "arm", "events",
-                            "heartbeat_period_s", "control_period_s", "arm_timeout_s",
+                            "heartbeat_period_s", "control_period_s", "arm_timeout_s", "arm_lost_s",
                             "pair_window_s", "start_after_frames", "controller", "security",
                             "realtime"});
   const config::Node format = root["format"];
@@ -61,6 +63,12 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
   cfg.heartbeat_period_s = positive("heartbeat_period_s", cfg.heartbeat_period_s);
   cfg.control_period_s = positive("control_period_s", cfg.control_period_s);
   cfg.arm_timeout_s = positive("arm_timeout_s", cfg.arm_timeout_s);
+  cfg.arm_lost_s = root.get("arm_lost_s", cfg.arm_lost_s);
+  if (!(cfg.arm_lost_s == 0 || (cfg.arm_lost_s >= cfg.arm_timeout_s && cfg.arm_lost_s <= 3600))) {
+    root["arm_lost_s"].fail(fmt::format(
+        "must be 0 (never give up) or a number of seconds from arm_timeout_s ({}) to 3600, is {}",
+        cfg.arm_timeout_s, root["arm_lost_s"].text()));
+  }
   cfg.pair_window_s = root.get("pair_window_s", cfg.pair_window_s);
   if (!(cfg.pair_window_s >= 0 && cfg.pair_window_s <= 1)) {
     root["pair_window_s"].fail(

@@ -31,7 +31,9 @@ struct HandConfig {
   std::string events;               // PUB endpoint for events; empty: none
   double heartbeat_period_s = 0.1;  // a Heartbeat to the arm controller when idle this long
   double control_period_s = 0.005;  // the controller also runs this often without new frames
-  double arm_timeout_s = 1.0;       // no ArmState for this long: the arm controller is gone
+  double arm_timeout_s = 1.0;       // no ArmState for this long: warn that the arm is silent
+  // Silent this long once heard (no ArmState, no Heartbeat): hold, say so and exit 4; 0: never.
+  double arm_lost_s = 5.0;
   // A frame waits at most this long for the other fingertip's frame of the same exposure
   // (received by sensor_node this close together); 0: the controller runs on every frame.
   double pair_window_s = 0.002;

@@ -247,6 +247,7 @@ Outcome HandNode::run() {
   const std::int64_t period_ns = seconds_to_ns(cfg_.control_period_s);
   const std::int64_t heartbeat_ns = seconds_to_ns(cfg_.heartbeat_period_s);
   const std::int64_t arm_timeout_ns = seconds_to_ns(cfg_.arm_timeout_s);
+  const std::int64_t arm_lost_ns = seconds_to_ns(cfg_.arm_lost_s);
   last_sent_ns_ = util::monotonic_ns() - heartbeat_ns;  // announce ourselves at once
   std::array<zmq::socket_ref, 2> sockets{sub_.socket(), arm_.socket()};
   Outcome outcome = Outcome::kStopped;
@@ -287,6 +288,16 @@ Outcome HandNode::run() {
       util::log_warn("no word from the arm controller for {:.1f} s",
                      static_cast<double>(now - last_arm_ns_) * 1e-9);
       arm_silent_reported_ = true;
+    }
+    if (have_arm_ && arm_lost_ns > 0 && now - last_arm_ns_ > arm_lost_ns) {
+      // Gone, not slow: hold (should it come back, the arm stays where it is) and give up.
+      send_command(control::Command::hold(), now, false);
+      util::log_error(
+          "the arm controller at {} has been silent for {:.1f} s (arm_lost_s {}): holding and "
+          "exiting",
+          cfg_.arm, static_cast<double>(now - last_arm_ns_) * 1e-9, cfg_.arm_lost_s);
+      outcome = Outcome::kArmLost;
+      break;
     }
     if (controller_.done()) {
       outcome = controller_.phase() == control::Phase::kDone ? Outcome::kDone : Outcome::kAborted;

@@ -31,13 +31,15 @@ struct HandCounters {
       0;  // frames whose other fingertip's frame did not come within pair_window_s
 };
 
-enum class Outcome { kDone, kAborted, kStopped };
+// kArmLost: the arm controller was silent for arm_lost_s; a Hold went out.
+enum class Outcome { kDone, kAborted, kStopped, kArmLost };
 
 class HandNode {
  public:
   HandNode(HandConfig cfg, zmq::context_t& ctx);
 
-  // Runs until the task ends or util::stop_requested(); on every way out a Stop goes to the arm.
+  // Runs until the task ends, util::stop_requested() (a Stop goes to the arm) or the arm
+  // controller is silent for arm_lost_s (a Hold goes to it).
   Outcome run();
   const HandCounters& counters() const { return counters_; }
 

@@ -330,6 +330,7 @@ int main(int argc, char** argv) {
                           "control_period_s",
                           "pair_window_s",
                           "arm_timeout_s",
+                          "arm_lost_s",
                           "controller",
                           "left.yaml",
                           "right.yaml",

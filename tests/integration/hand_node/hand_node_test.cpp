@@ -413,6 +413,32 @@ Injection paper_story(const SimWorld& w, int) {
   return inj;
 }
 
+// An arm controller that goes silent mid-task (no ArmState, no answer) past arm_lost_s: hand_node
+// holds, says so in one line and exits 4, within arm_lost_s and a second of the last word.
+TEST(HandNode, ArmControllerSilentPastArmLostHoldsAndExitsFour) {
+  HandNodeRun run("arm_timeout_s: 0.2\narm_lost_s: 0.5\n");
+  std::optional<std::chrono::steady_clock::time_point> last_word;
+  const RunResult r = run.run(
+      [&](const SimWorld&, int frame) {
+        Injection inj;
+        inj.send_arm_state = frame < 60;
+        if (frame == 59) last_word = std::chrono::steady_clock::now();
+        return inj;
+      },
+      20s);
+  const auto gone = std::chrono::steady_clock::now();
+  ASSERT_TRUE(last_word);
+  EXPECT_EQ(r.process.exit_code, 4) << r.process.err;
+  EXPECT_LT(gone - *last_word, 1500ms);
+  EXPECT_NE(r.process.err.find("has been silent for"), std::string::npos) << r.process.err;
+  EXPECT_NE(r.process.err.find("(arm_lost_s 0.5): holding and exiting"), std::string::npos)
+      << r.process.err;
+  ASSERT_FALSE(r.commands.empty());
+  EXPECT_EQ(r.commands.back(), control::CommandKind::kHold);
+  // It had started the task before the arm went silent.
+  EXPECT_GT(r.commands.size(), 1U);
+}
+
 TEST(HandNode, RunsThePapersTaskAndEndsDone) {
   HandNodeRun run;
   const RunResult r = run.run(paper_story, 40s);

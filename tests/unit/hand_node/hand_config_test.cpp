@@ -83,6 +83,19 @@ TEST_F(HandConfigFile, StartAfterFramesDefaultsTo20AndIsRead) {
     expect_refused("start_after_frames", bad);
 }
 
+// hand_node gives up on an arm controller silent for arm_lost_s (5 s); 0 never does; the time
+// is at least arm_timeout_s, the warning's.
+TEST_F(HandConfigFile, ArmLostDefaultsToFiveSecondsAndIsRead) {
+  std::vector<std::string> warnings;
+  EXPECT_DOUBLE_EQ(load_hand_config(write(""), &warnings).arm_lost_s, 5.0);
+  EXPECT_DOUBLE_EQ(load_hand_config(write("arm_lost_s: 0\n"), &warnings).arm_lost_s, 0.0);
+  EXPECT_DOUBLE_EQ(
+      load_hand_config(write("arm_timeout_s: 0.2\narm_lost_s: 0.5\n"), &warnings).arm_lost_s, 0.5);
+  EXPECT_TRUE(warnings.empty()) << warnings.front();
+  for (const char* bad : {"-1", "0.5", "4000", "soon"})
+    expect_refused("arm_lost_s", bad);
+}
+
 TEST_F(HandConfigFile, BadPairWindowNamesFileKeyAndValue) {
   for (const char* bad : {"-0.5", "2", "soon"})
     expect_refused("pair_window_s", bad);
