@@ -171,8 +171,9 @@ std::vector<float> balance_runs(std::span<const float> weight,
   std::size_t rows = 0;
   for (const std::size_t n : run_rows)
     rows += n;
-  if (rows != weight.size() || !(max_scale >= 1.0))
+  if (rows != weight.size())
     throw std::invalid_argument("balance_runs: the runs' rows do not add up to the weights'");
+  if (!(max_scale >= 1.0)) throw std::invalid_argument("balance_runs: max_scale must be >= 1");
   std::vector<double> sums(run_rows.size(), 0.0);
   double total = 0;
   for (std::size_t k = 0, at = 0; k < run_rows.size(); ++k) {

@@ -70,9 +70,7 @@ std::string expect_no_allocation(const Config& cfg) {
 }
 
 TEST(Allocation, UpdateWithThePapersRuleAllocatesNothing) {
-  Config cfg;
-  cfg.slip_detector = SlipDetectorKind::kPaper;
-  EXPECT_EQ(expect_no_allocation(cfg), "Ns slip detections in one cycle");
+  EXPECT_EQ(expect_no_allocation(testing::paper_config()), "Ns slip detections in one cycle");
 }
 
 TEST(Allocation, UpdateWithTheFieldDetectorAllocatesNothing) {
