@@ -97,6 +97,7 @@ HandConfig load_hand_config(const std::filesystem::path& path, std::vector<std::
     cfg.sensor_security =
         wire::ClientSecurity{own, load("sensor_public_key", wire::load_public_key)};
     cfg.arm_security = wire::ClientSecurity{own, load("arm_public_key", wire::load_public_key)};
+    cfg.events_security = wire::ServerSecurity{own, {}};
   }
   if (auto rt = root.find("realtime")) cfg.realtime = config::parse_realtime_section(*rt);
   return cfg;

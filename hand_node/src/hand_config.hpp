@@ -42,9 +42,12 @@ struct HandConfig {
   // first command should not answer them.
   int start_after_frames = 20;
   control::Config controller;
-  // CURVE on both links (docs/security.md); unset: plain TCP.
+  // CURVE on every socket (docs/security.md); unset: plain TCP.
   std::optional<wire::ClientSecurity> sensor_security;  // SUB: the sensor_node's public key
   std::optional<wire::ClientSecurity> arm_security;     // DEALER: the arm controller's public key
+  // The events PUB, a CURVE server with hand_node's own key pair: a subscriber must know
+  // hand_node's public key.
+  std::optional<wire::ServerSecurity> events_security;
   // SCHED_FIFO and locked memory for the whole program (docs/deployment.md); default: neither.
   util::RealtimeScheduling realtime;
 };

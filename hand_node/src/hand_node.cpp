@@ -26,7 +26,8 @@ HandNode::HandNode(HandConfig cfg, zmq::context_t& ctx)
       controller_(cfg_.controller),
       pairing_(seconds_to_ns(cfg_.pair_window_s)),
       stale_ns_(seconds_to_ns(cfg_.controller.stale_after_s)) {
-  if (!cfg_.events.empty()) events_.emplace(ctx, cfg_.events);
+  if (!cfg_.events.empty())
+    events_.emplace(ctx, cfg_.events, cfg_.events_security ? &*cfg_.events_security : nullptr);
   for (std::size_t i = 0; i < control::kFingertips; ++i) {
     frames_[i].elements.resize(cfg_.fingertips[i].calibration.elements.size());
   }
@@ -244,6 +245,9 @@ void HandNode::step(std::int64_t now_ns, FramePairing::Fresh fresh) {
 Outcome HandNode::run() {
   util::log_info("subscribing to {} sensor endpoint(s), arm controller at {}",
                  cfg_.subscribe.size(), cfg_.arm);
+  if (events_) {
+    util::log_info("events on {}{}", events_->endpoint(), cfg_.events_security ? " (CURVE)" : "");
+  }
   const std::int64_t period_ns = seconds_to_ns(cfg_.control_period_s);
   const std::int64_t heartbeat_ns = seconds_to_ns(cfg_.heartbeat_period_s);
   const std::int64_t arm_timeout_ns = seconds_to_ns(cfg_.arm_timeout_s);

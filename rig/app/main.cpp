@@ -108,6 +108,13 @@ int run(int argc, char** argv) {
       ->allow_extra_args(false);
   app.add_option("--observe-key", observe_key,
                  "real time: sensor_node's public key (NAME.pub), for its CURVE-secured frames");
+  std::string observe_events_key;
+  app.add_option("--observe-events-key", observe_events_key,
+                 "real time: hand_node's public key (NAME.pub), for its CURVE-secured events");
+  std::string truth_key;
+  app.add_option("--truth-key", truth_key,
+                 "real time: CURVE on the ground-truth PUB: its key pair (NAME.key); a subscriber "
+                 "needs NAME.pub");
   app.add_option("--write-configs", write_configs,
                  "write left.yaml, right.yaml, sensor_node.yaml and hand_node.yaml for this "
                  "scenario into DIR and exit");
@@ -221,6 +228,14 @@ int run(int argc, char** argv) {
       // sensor_node's PUB lets in any client that knows its public key: the rig's own pair is new.
       rt.observe_security = tactile::wire::ClientSecurity{
           tactile::wire::generate_keypair(), tactile::wire::load_public_key(observe_key)};
+    }
+    if (!observe_events_key.empty()) {
+      rt.observe_events_security = tactile::wire::ClientSecurity{
+          tactile::wire::generate_keypair(), tactile::wire::load_public_key(observe_events_key)};
+    }
+    if (!truth_key.empty()) {
+      rt.truth_security =
+          tactile::wire::ServerSecurity{tactile::wire::load_key_pair(truth_key), {}};
     }
     if (!write_configs.empty()) {
       tactile::rig::write_node_configs(scenario, write_configs, rt);

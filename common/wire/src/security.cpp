@@ -8,6 +8,7 @@
 #include <iterator>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <vector>
 #include <zmq_addon.hpp>
 
@@ -118,11 +119,20 @@ std::string load_public_key(const std::filesystem::path& file) {
   return k.public_z85;
 }
 
+namespace {
+// ZAP domains. A context has one ZAP handler, and every CURVE server in it asks that handler: a
+// server with no client list (a PUB that lets in whoever knows its public key) says so by its
+// domain, so the arm's list in the same process does not shut out its subscribers.
+constexpr std::string_view kListedDomain = "tactile";
+constexpr std::string_view kOpenDomain = "tactile-open";
+}  // namespace
+
 void apply_server_security(zmq::socket_t& s, const ServerSecurity& sec) {
   s.set(zmq::sockopt::curve_server, true);
   s.set(zmq::sockopt::curve_secretkey, sec.keys.secret_z85);
   // Authentication requests go to the ZAP handler; without one the context admits every client.
-  s.set(zmq::sockopt::zap_domain, std::string("tactile"));
+  s.set(zmq::sockopt::zap_domain,
+        std::string(sec.authorized_clients.empty() ? kOpenDomain : kListedDomain));
 }
 
 void apply_client_security(zmq::socket_t& s, const ClientSecurity& sec) {
@@ -164,11 +174,14 @@ void CurveAuthenticator::serve() {
     }
     const std::string version = parts[0].to_string();
     const std::string request_id = parts[1].to_string();
+    const std::string domain = parts[2].to_string();
     const std::string mechanism = parts[5].to_string();
     bool ok = false;
     if (version == "1.0" && mechanism == "CURVE" && parts.size() >= 7) {
+      // A client of an open server has completed the handshake, so it knows the server's key.
       const std::string key = parts[6].to_string();
-      ok = std::find(allowed_.begin(), allowed_.end(), key) != allowed_.end();
+      ok = domain == kOpenDomain ||
+           std::find(allowed_.begin(), allowed_.end(), key) != allowed_.end();
     }
     (ok ? accepted_ : refused_)++;
     const std::string code = ok ? "200" : "400";

@@ -301,10 +301,13 @@ RealtimeRun::RealtimeRun(const Scenario& sc, const RealtimeOptions& opt)
   }
 
   // Sockets.
-  if (!opt.truth_endpoint.empty()) truth_pub_.emplace(ctx_, opt.truth_endpoint);
+  if (!opt.truth_endpoint.empty())
+    truth_pub_.emplace(ctx_, opt.truth_endpoint,
+                       opt.truth_security ? &*opt.truth_security : nullptr);
   if (!opt.observe_events.empty())
     events_.emplace(ctx_, std::vector<std::string>{opt.observe_events},
-                    std::vector<std::string>{wire::kEventTopic});
+                    std::vector<std::string>{wire::kEventTopic},
+                    opt.observe_events_security ? &*opt.observe_events_security : nullptr);
   util::log_info("arm controller on {}, ground truth on {}, deadman {:.0f} ms", arm_.endpoint(),
                  truth_pub_ ? truth_pub_->endpoint() : std::string("(none)"), opt.deadman_s * 1e3);
   if (opt.on_ready) opt.on_ready();

@@ -136,6 +136,7 @@ TACTILE_KEYS=$work/keys bash scripts/run-compose --curve --no-build --project "$
   2>&1 | tee "$work/curve.log" >&2 || fail "run-compose --curve failed (status ${PIPESTATUS[0]})"
 check_report "$work/curve"
 grep -q "publishing on tcp://.*(CURVE)" "$work/curve.log" || fail "sensor_node did not publish under CURVE"
+grep -q "events on tcp://.*(CURVE)" "$work/curve.log" || fail "hand_node did not publish its events under CURVE"
 [ "$(stat -c %a "$work/keys/arm.key")" = 600 ] || fail "the arm's key file is not mode 0600"
 check_nothing_left
 

@@ -126,6 +126,53 @@ TEST_F(SecuredHandNode, TakesFramesOnlyFromTheSensorItHasTheKeyOf) {
   EXPECT_EQ(hand.wait(10s).exit_code, 0);
 }
 
+// The events PUB is a CURVE server with hand_node's own key: a subscriber that knows hand_node's
+// public key receives the run's messages (the ArmStates it copies there), one without keys and
+// one that expects another key receive nothing.
+TEST_F(SecuredHandNode, EventsReachOnlySubscribersThatKnowItsKey) {
+  zmq::context_t ctx;
+  const wire::ServerSecurity arm_sec{wire::load_key_pair(dir_ / "keys/arm.key"),
+                                     {wire::load_public_key(dir_ / "keys/hand.pub")}};
+  wire::Router arm(ctx, "tcp://127.0.0.1:*", &arm_sec);
+  const std::string events_endpoint = "ipc://" + (dir_ / "events").string();
+  testing::Process hand({TACTILE_HAND_NODE_PATH, "--config", (dir_ / "hand.yaml").string(), "--arm",
+                         arm.endpoint(), "--events", events_endpoint});
+  const wire::CurveKeyPair recorder_keys = wire::generate_keypair();
+  const wire::ClientSecurity knows{recorder_keys, wire::load_public_key(dir_ / "keys/hand.pub")};
+  const wire::ClientSecurity fooled{recorder_keys,
+                                    wire::load_public_key(dir_ / "keys/intruder.pub")};
+  const std::vector<std::string> topics{""};
+  wire::Subscriber good(ctx, {events_endpoint}, topics, &knows);
+  wire::Subscriber wrong(ctx, {events_endpoint}, topics, &fooled);
+  wire::Subscriber plain(ctx, {events_endpoint}, topics);
+
+  std::string peer;
+  std::vector<std::uint8_t> payload;
+  v1::Envelope env;
+  wire::ArmStateData state;
+  std::string out;
+  wire::TopicMessage m;
+  std::uint64_t to_good = 0;
+  std::uint64_t to_others = 0;
+  const auto end = std::chrono::steady_clock::now() + 2s;
+  while (std::chrono::steady_clock::now() < end) {
+    // Answer each heartbeat with an ArmState, which hand_node copies onto its events.
+    while (arm.receive(peer, payload, 10ms)) {
+      wire::fill_arm_state(state, kIds, *env.mutable_arm_state());
+      wire::encode(env, out);
+      arm.send(peer, wire::bytes_of(out));
+    }
+    while (good.receive(m, 0ms))
+      to_good += m.topic == wire::kArmTopic ? 1 : 0;
+    while (wrong.receive(m, 0ms) || plain.receive(m, 0ms))
+      ++to_others;
+  }
+  EXPECT_GT(to_good, 0U) << hand.err_so_far();
+  EXPECT_EQ(to_others, 0U);
+  hand.signal(SIGTERM);
+  EXPECT_EQ(hand.wait(10s).exit_code, 0);
+}
+
 TEST_F(SecuredHandNode, RefusesAReadableSecretKey) {
   ::chmod((dir_ / "keys/hand.key").c_str(), 0640);
   const auto r = testing::run({TACTILE_HAND_NODE_PATH, "--config", (dir_ / "hand.yaml").string()});

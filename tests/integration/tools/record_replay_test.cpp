@@ -432,6 +432,15 @@ TEST(Tools, BadOptionsAndFilesGiveOneClearLine) {
                     (dir / "b.tlog").string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("no.pub"), std::string::npos) << r.err;
+  // One publisher named plain and with --curve: refused before anything is recorded.
+  wire::write_key_files(dir.path(), "hand", wire::generate_keypair());
+  r = testing::run({TACTILE_RECORD_PATH, "tcp://127.0.0.1:1", "--curve",
+                    "tcp://127.0.0.1:1=" + (dir / "hand.pub").string(), "-o",
+                    (dir / "c.tlog").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("'tcp://127.0.0.1:1' is given twice"), std::string::npos) << r.err;
+  EXPECT_TRUE(one_line(r)) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "c.tlog"));
 
   r = testing::run({TACTILE_REPLAY_PATH, (dir / "missing.tlog").string()});
   EXPECT_EQ(r.exit_code, 1);

@@ -26,6 +26,16 @@ bool delivered(Publisher& pub, Subscriber& sub, int attempts = 100) {
   return false;
 }
 
+// A client that knows the arm's public key but is not in its list: nothing it sends arrives.
+bool refuses_a_stranger(zmq::context_t& ctx, Router& arm, const std::string& arm_public_z85) {
+  const ClientSecurity stranger{generate_keypair(), arm_public_z85};
+  Dealer intruder(ctx, arm.endpoint(), &stranger);
+  intruder.send(bytes_of("stop everything"));
+  std::string peer;
+  std::vector<std::uint8_t> payload;
+  return !arm.receive(peer, payload, 500ms) && arm.refused_clients() >= 1;
+}
+
 TEST(Curve, IsAvailable) {
   EXPECT_TRUE(curve_available());
 }
@@ -57,17 +67,12 @@ TEST(Curve, RouterTakesCommandsOnlyFromAuthorizedClients) {
   zmq::context_t ctx;
   const CurveKeyPair arm_keys = generate_keypair();
   const CurveKeyPair hand_keys = generate_keypair();
-  const CurveKeyPair stranger_keys = generate_keypair();
   const ServerSecurity arm_sec{arm_keys, {hand_keys.public_z85}};
   Router arm(ctx, "tcp://127.0.0.1:*", &arm_sec);
 
-  const ClientSecurity stranger{stranger_keys, arm_keys.public_z85};
-  Dealer intruder(ctx, arm.endpoint(), &stranger);
-  intruder.send(bytes_of("stop everything"));
+  EXPECT_TRUE(refuses_a_stranger(ctx, arm, arm_keys.public_z85));
   std::string peer;
   std::vector<std::uint8_t> payload;
-  EXPECT_FALSE(arm.receive(peer, payload, 500ms));
-  EXPECT_GE(arm.refused_clients(), 1U);
 
   Dealer no_keys(ctx, arm.endpoint());
   no_keys.send(bytes_of("hello"));
@@ -81,6 +86,27 @@ TEST(Curve, RouterTakesCommandsOnlyFromAuthorizedClients) {
   ASSERT_TRUE(arm.send(peer, bytes_of("state")));
   ASSERT_TRUE(client.receive(payload, 2000ms));
   EXPECT_EQ(std::string(payload.begin(), payload.end()), "state");
+}
+
+// The rig's process holds the arm's ROUTER, with its client list, and the ground-truth PUB, which
+// lets in whoever knows its key: one context has one authentication handler, and the arm's list
+// must not shut out the PUB's subscribers (nor let a plain one in).
+TEST(Curve, AnOpenPublisherBesideAListedRouterAdmitsEveryClientThatKnowsItsKey) {
+  zmq::context_t ctx;
+  const CurveKeyPair arm_keys = generate_keypair();
+  const ServerSecurity arm_sec{arm_keys, {generate_keypair().public_z85}};
+  Router arm(ctx, "tcp://127.0.0.1:*", &arm_sec);
+  const ServerSecurity truth_sec{generate_keypair(), {}};
+  Publisher truth(ctx, "tcp://127.0.0.1:*", &truth_sec);
+
+  const ClientSecurity recorder{generate_keypair(), truth_sec.keys.public_z85};
+  Subscriber sub(ctx, {truth.endpoint()}, {kFrameTopicPrefix}, &recorder);
+  EXPECT_TRUE(delivered(truth, sub));
+  Subscriber outsider(ctx, {truth.endpoint()}, {kFrameTopicPrefix});
+  EXPECT_FALSE(delivered(truth, outsider, 50));
+
+  // The router's list still holds.
+  EXPECT_TRUE(refuses_a_stranger(ctx, arm, arm_keys.public_z85));
 }
 
 TEST(KeyFiles, RoundTripWithTheRightPermissions) {

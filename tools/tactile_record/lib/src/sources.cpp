@@ -1,5 +1,6 @@
 #include "tactile/recording/sources.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "tactile/wire/sockets.hpp"
@@ -26,6 +27,14 @@ Sources::Sources(zmq::context_t& ctx, const SourceOptions& o) : topics_(o.topics
     client = o.client_key.empty() ? wire::generate_keypair() : wire::load_key_pair(o.client_key);
   }
   auto add = [&](const std::string& endpoint, const wire::ClientSecurity* security) {
+    // Named twice, an endpoint would be subscribed twice: a plain subscription to a CURVE
+    // publisher hears nothing (and a silence timeout then names it), a second CURVE one records
+    // every message twice.
+    if (std::find(endpoints_.begin(), endpoints_.end(), endpoint) != endpoints_.end()) {
+      throw std::invalid_argument("'" + endpoint +
+                                  "' is given twice; name each publisher once (with --curve "
+                                  "ENDPOINT=KEY alone when it uses CURVE)");
+    }
     zmq::socket_t s(ctx, zmq::socket_type::sub);
     s.set(zmq::sockopt::linger, 0);
     s.set(zmq::sockopt::rcvhwm, o.receive_hwm);

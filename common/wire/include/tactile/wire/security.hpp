@@ -48,8 +48,10 @@ struct ClientSecurity {
 };
 
 // Answers ZeroMQ's authentication requests (ZAP) for one context: CURVE clients whose public key
-// is in the list are let in, every other request is refused and counted. Bind the sockets it
-// guards after making it; it stops when destroyed.
+// is in the list are let in, every other request is refused and counted. A server secured with no
+// client list (apply_server_security names it by its ZAP domain) lets in every CURVE client, which
+// has proved by its handshake that it knows the server's public key. Bind the sockets it guards
+// after making it; it stops when destroyed.
 class CurveAuthenticator {
  public:
   CurveAuthenticator(zmq::context_t& ctx, std::vector<std::string> authorized_clients_z85);

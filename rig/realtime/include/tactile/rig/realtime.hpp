@@ -30,6 +30,9 @@ struct RealtimeOptions {
   std::string observe_events = "tcp://127.0.0.1:5558";
   std::optional<wire::ServerSecurity> arm_security;
   std::optional<wire::ClientSecurity> observe_security;  // for the frames (sensor_node's key)
+  std::optional<wire::ClientSecurity> observe_events_security;  // hand_node's key
+  // The ground-truth PUB as a CURVE server: a subscriber must know its public key.
+  std::optional<wire::ServerSecurity> truth_security;
   // The arm holds when it heard nothing from hand_node for this long.
   double deadman_s = 0.04;
   // Each frame is rendered this long before the camera sends it (the fake camera sends at
