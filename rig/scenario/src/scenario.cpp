@@ -1,9 +1,12 @@
 #include "tactile/rig/scenario.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <string_view>
 
+#include "tactile/config/controller_file.hpp"
 #include "tactile/config/yaml.hpp"
 #include "tactile/control/config.hpp"
 #include "tactile/util/files.hpp"
@@ -51,54 +54,18 @@ double Scenario::step_s() const {
 }
 
 const std::vector<std::string>& controller_keys() {
-  static const std::vector<std::string> keys{
-      "f1_n",
-      "f2_n",
-      "dr_mm",
-      "twist_dr_factor",
-      "approach_speed_mps",
-      "recompress_gain_mps",
-      "recompress_duration_s",
-      "recompress_max_f2_fraction",
-      "backoff_speed_mps",
-      "max_finger_speed_mps",
-      "safe_height_m",
-      "grasp_height_m",
-      "carry_height_m",
-      "lower_limit_m",
-      "retract_height_m",
-      "move_speed_mps",
-      "lift_speed_mps",
-      "carry_speed_mps",
-      "lower_speed_mps",
-      "max_yaw_rate_rps",
-      "twist_yaw_rate_rps",
-      "grasp_settle_s",
-      "open_speed_mps",
-      "open_distance_m",
-      "open_settle_s",
-      "twist_angle_deg",
-      "ns",
-      "cycle_slip_min",
-      "max_twist_cycles",
-      "tight_torque_rise_nm",
-      "tight_torque_rise_ratio",
-      "tight_level_s",
-      "tight_plateau_s",
-      "tight_plateau_fraction",
-      "search_timeout_s",
-      "segment_timeout_s",
-      "slip_detector",
-      "field_partial_slip_ratio",
-      "field_edge_ratio",
-      "field_drop_ratio",
-      "field_mu_initial",
-      "field_min_fz_n",
-      "field_arm_speed_mps",
-      "field_arm_yaw_rate_rps",
-      "load_transfer_n",
-      "lift_confirm_s",
-  };
+  // The controller's own keys (config::controller_config_keys), less those the scenario's world
+  // decides: where the cap and the bottle are, which way the thread turns, gravity and the task.
+  static const std::vector<std::string> keys = [] {
+    const std::array<std::string_view, 7> world{
+        "task",       "gravity_axis", "cap_x_m",          "cap_y_m",
+        "bottle_x_m", "bottle_y_m",   "tighten_clockwise"};
+    std::vector<std::string> k = config::controller_config_keys();
+    std::erase_if(k, [&](const std::string& key) {
+      return std::find(world.begin(), world.end(), key) != world.end();
+    });
+    return k;
+  }();
   return keys;
 }
 

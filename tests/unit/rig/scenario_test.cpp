@@ -5,9 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <set>
 #include <string>
 
+#include "tactile/config/controller_file.hpp"
 #include "tactile/config/yaml.hpp"
+#include "tactile/control/config.hpp"
 
 namespace tactile::rig {
 namespace {
@@ -129,6 +132,27 @@ TEST(Scenario, ControllerOverridesAreKept) {
   ASSERT_EQ(s.controller.size(), 2U);
   EXPECT_EQ(s.controller[0].first, "twist_yaw_rate_rps");
   EXPECT_EQ(s.controller[1].second, 6.0);
+}
+
+// One list of controller keys: every key the controller's configuration file takes is a
+// scenario's override too, and reaches the controller, except those the scenario's world decides.
+TEST(Scenario, TakesEveryControllerKeyButThoseItsWorldDecides) {
+  const std::set<std::string> world{"task",       "gravity_axis", "cap_x_m",          "cap_y_m",
+                                    "bottle_x_m", "bottle_y_m",   "tighten_clockwise"};
+  for (const std::string& key : config::controller_config_keys()) {
+    if (key == "slip_detector") continue;  // a name, not a number: ControllerOverridesAreKept
+    if (world.contains(key)) {
+      EXPECT_NE(error_of(kMinimal + "controller: {" + key + ": 1}\n").find("unknown key"),
+                std::string::npos)
+          << key;
+      continue;
+    }
+    // Taken by the scenario, and a setting the rig's controller configuration can set.
+    const Scenario s = parse_scenario(kMinimal + "controller: {" + key + ": 1}\n", "s.yaml");
+    ASSERT_EQ(s.controller.size(), 1U) << key;
+    control::Config cfg;
+    EXPECT_TRUE(config::set_controller_field(cfg, key, 1.0)) << key;
+  }
 }
 
 }  // namespace
