@@ -179,6 +179,20 @@ int run(Options opt) {
   Sources::Message m;
   std::uint64_t received = 0;
   int code = 0;
+  // Writes one received message; false when the log cannot take it.
+  const auto keep = [&](const Sources::Message& msg) {
+    const std::string_view topic(static_cast<const char*>(msg.topic.data()), msg.topic.size());
+    const auto kind = topic.starts_with(tactile::wire::kRawTopicPrefix)
+                          ? tactile::v1::PAYLOAD_KIND_RAW_FRAME
+                          : tactile::v1::PAYLOAD_KIND_ENVELOPE;
+    if (writer.append(tactile::util::realtime_ns(), topic, sources.endpoint(msg.source), kind,
+                      tactile::wire::bytes_of(msg.payload)) != WriteStatus::kOk) {
+      return false;
+    }
+    counts.add(topic, msg.payload);
+    ++received;
+    return true;
+  };
   while (!tactile::util::stop_requested()) {
     const std::int64_t now = tactile::util::monotonic_ns();
     if (now >= end || (opt.count > 0 && received >= opt.count)) break;
@@ -199,25 +213,33 @@ int run(Options opt) {
     }
     const auto wait = std::chrono::milliseconds(std::clamp<std::int64_t>(
         (std::min({end, next_progress, silence_check}) - now) / 1000000, 1, 50));
-    if (sources.receive(m, wait)) {
-      const std::string_view topic(static_cast<const char*>(m.topic.data()), m.topic.size());
-      const auto kind = topic.starts_with(tactile::wire::kRawTopicPrefix)
-                            ? tactile::v1::PAYLOAD_KIND_RAW_FRAME
-                            : tactile::v1::PAYLOAD_KIND_ENVELOPE;
-      const WriteStatus s =
-          writer.append(tactile::util::realtime_ns(), topic, sources.endpoint(m.source), kind,
-                        tactile::wire::bytes_of(m.payload));
-      if (s != WriteStatus::kOk) {
-        code = 1;
-        break;
-      }
-      counts.add(topic, m.payload);
-      ++received;
+    if (sources.receive(m, wait) && !keep(m)) {
+      code = 1;
+      break;
     }
     if (writer.poll() != WriteStatus::kOk) {
       code = 1;
       break;
     }
+  }
+  // Stopped by a signal: what had already arrived is part of the run. A recorder that fell
+  // behind (a loaded machine, a slow disk) holds seconds of it in its queues, and the end of a
+  // run (the publishers stopped first, as run-system does) would otherwise be lost. Bounded:
+  // publishers that still send cannot keep it for longer than kDrainLimit.
+  if (code == 0 && tactile::util::stop_requested()) {
+    constexpr std::int64_t kDrainLimit = 10'000'000'000;  // ns
+    const std::int64_t drain_end = tactile::util::monotonic_ns() + kDrainLimit;
+    const std::uint64_t before = received;
+    while (tactile::util::monotonic_ns() < drain_end &&
+           sources.receive(m, std::chrono::milliseconds(20))) {
+      if (!keep(m)) {
+        code = 1;
+        break;
+      }
+    }
+    if (received > before)
+      tactile::util::log_info("stopping: wrote the {} messages already received",
+                              received - before);
   }
   if (writer.close() != WriteStatus::kOk) code = 1;
   if (code != 0 && !writer.error().empty()) {

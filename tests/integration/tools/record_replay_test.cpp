@@ -293,6 +293,51 @@ TEST(Record, StopsCleanlyOnSignalsAndKeepsWhatItGot) {
   }
 }
 
+// A recorder that fell behind (here: the slowest compression, on large messages) still holds
+// messages that had arrived when the signal came: it writes them before it closes the log.
+TEST(Record, OnASignalItFirstWritesWhatHadAlreadyArrived) {
+  TempDir dir;
+  zmq::context_t ctx;
+  wire::Publisher pub(ctx, "tcp://127.0.0.1:*");
+  const auto path = dir / "behind.tlog";
+  Process rec({TACTILE_RECORD_PATH, "-o", path.string(), pub.endpoint(), "--level", "19",
+               "--flush-interval", "0.05", "--topic", "big", "--topic", wire::kEventTopic});
+  v1::Envelope env;
+  env.mutable_event()->set_kind(v1::EVENT_KIND_TOUCH);
+  std::string event;
+  wire::encode(env, event);
+  // Subscribed once a first event is on disk (publish and poll, bounded).
+  const auto deadline = std::chrono::steady_clock::now() + 20s;
+  std::uintmax_t header_size = 0;
+  while (std::chrono::steady_clock::now() < deadline) {
+    pub.send(wire::kEventTopic, wire::bytes_of(event));
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (!ec && header_size == 0) header_size = size;
+    if (!ec && size > header_size && header_size > 0) break;
+    std::this_thread::sleep_for(5ms);
+  }
+  // 60 messages of 256 KiB that compress slowly (a counter's bytes, like an image's texture).
+  constexpr int kBig = 60;
+  std::vector<std::uint8_t> big(256 * 1024);
+  std::uint32_t x = 12345;
+  for (int k = 0; k < kBig; ++k) {
+    for (auto& b : big) {
+      x = x * 1664525U + 1013904223U;
+      b = static_cast<std::uint8_t>((x >> 24) & 0x3F);
+    }
+    pub.send("big", big);
+  }
+  std::this_thread::sleep_for(200ms);  // on the wire to the recorder, not yet written
+  rec.signal(SIGINT);
+  const auto r = rec.wait(60s);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const auto log = read_log(path);
+  EXPECT_EQ(log.end, recording::ReadStatus::kEnd);
+  ASSERT_TRUE(log.per_topic.contains("big")) << r.err;
+  EXPECT_EQ(log.per_topic.at("big"), kBig) << r.err;
+}
+
 // Publishes an event on `pub` every 5 ms while `rec` runs (bounded).
 void publish_while_running(wire::Publisher& pub, Process& rec) {
   v1::Envelope env;
