@@ -96,7 +96,9 @@ int run(int argc, char** argv) {
     tactile::wire::install_protobuf_log_handler();
     tactile::util::ReadyFile ready(ready_path);
     zmq::context_t ctx;
-    tactile::sensor::SharedPublisher pub(ctx, cfg.publish, cfg.security ? &*cfg.security : nullptr);
+    tactile::sensor::SharedPublisher pub(
+        ctx, cfg.publish, cfg.security ? &*cfg.security : nullptr,
+        cfg.raw_frames ? tactile::sensor::kRawFramesSendQueue : tactile::wire::kDefaultSendQueue);
     tactile::util::log_info("publishing on {}{}", pub.endpoint(), cfg.security ? " (CURVE)" : "");
     std::vector<std::unique_ptr<tactile::sensor::Pipeline>> pipelines;
     for (const CameraConfig& c : cfg.cameras) {

@@ -21,11 +21,18 @@ namespace tactile::sensor {
 
 // One PUB socket shared by every camera thread (a ZeroMQ socket must not be used by two threads
 // at once; the lock is held only for the send).
+// With raw frames, messages kept for each subscriber that falls behind. A recorder of raw frames
+// (300 KB each at 640 x 480) falls seconds behind on a loaded machine; with ZeroMQ's default of
+// 1000 messages (1.2 s of two cameras at 200 fps) run-system's recordings lost runs of 40 to 300
+// frames mid-run. 5000 is about 6 s of that, and at most about 750 MB held for one subscriber
+// that stops reading altogether.
+inline constexpr int kRawFramesSendQueue = 5000;
+
 class SharedPublisher {
  public:
   SharedPublisher(zmq::context_t& ctx, const std::string& endpoint,
-                  const wire::ServerSecurity* security)
-      : pub_(ctx, endpoint, security) {}
+                  const wire::ServerSecurity* security, int send_queue)
+      : pub_(ctx, endpoint, security, send_queue) {}
   void send(std::string_view topic, std::span<const std::uint8_t> payload) {
     std::lock_guard lock(mutex_);
     pub_.send(topic, payload);

@@ -108,10 +108,11 @@ unsigned poll_readable(std::span<zmq::socket_ref> sockets, std::chrono::millisec
 }
 
 Publisher::Publisher(zmq::context_t& ctx, const std::string& endpoint,
-                     const ServerSecurity* security)
+                     const ServerSecurity* security, int send_queue)
     : socket_(ctx, zmq::socket_type::pub) {
   common_options(socket_);
   if (security != nullptr) apply_server_security(socket_, *security);
+  socket_.set(zmq::sockopt::sndhwm, send_queue);
   bind_or_throw(socket_, "PUB", endpoint);
 }
 

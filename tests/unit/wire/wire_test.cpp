@@ -414,6 +414,43 @@ TEST(Sockets, PollReadableAlsoWakesOnAFileDescriptor) {
   ::close(pipe_fds[1]);
 }
 
+// A subscriber that stops reading for a while (a recorder on a loaded machine) gets every message
+// sent meanwhile as long as they fit the publisher's send queue; past it the publisher drops.
+TEST(Sockets, PublisherKeepsItsSendQueueForASubscriberThatFallsBehind) {
+  constexpr int kBurst = 2500;
+  const std::vector<std::uint8_t> payload(64 * 1024, 7);
+  const auto delivered = [&](int send_queue) {
+    zmq::context_t ctx;
+    Publisher pub(ctx, "tcp://127.0.0.1:*", nullptr, send_queue);
+    zmq::socket_t sub(ctx, zmq::socket_type::sub);
+    sub.set(zmq::sockopt::rcvhwm, 1);  // the subscriber's own queue holds (almost) nothing
+    sub.set(zmq::sockopt::subscribe, "");
+    sub.connect(pub.endpoint());
+    zmq::message_t part;
+    bool ready = false;  // the subscription has reached the publisher (bounded)
+    for (int i = 0; i < 400 && !ready; ++i) {
+      pub.send("ping", bytes_of("x"));
+      ready = sub.recv(part, zmq::recv_flags::dontwait).has_value();
+      if (!ready) std::this_thread::sleep_for(5ms);
+    }
+    EXPECT_TRUE(ready);
+    while (sub.recv(part, zmq::recv_flags::dontwait)) {
+    }
+    for (int i = 0; i < kBurst; ++i)
+      pub.send("big", payload);  // nobody reads meanwhile
+    int n = 0;
+    sub.set(zmq::sockopt::rcvtimeo, 200);
+    bool first = true;  // the next part is a topic
+    while (sub.recv(part)) {
+      if (first && part.to_string_view() == "big") ++n;
+      first = !part.more();
+    }
+    return n;
+  };
+  EXPECT_EQ(delivered(5000), kBurst);
+  EXPECT_LT(delivered(kDefaultSendQueue), kBurst * 3 / 4);
+}
+
 TEST(Sockets, SubscriberCountsMessagesOfTheWrongShape) {
   zmq::context_t ctx;
   zmq::socket_t raw(ctx, zmq::socket_type::pub);

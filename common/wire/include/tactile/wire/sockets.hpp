@@ -33,12 +33,17 @@ inline std::span<const std::uint8_t> bytes_of(const zmq::message_t& m) noexcept 
 bool receive_pair(zmq::socket_ref socket, zmq::message_t& first, zmq::message_t& second,
                   std::uint64_t& malformed);
 
+// ZeroMQ's own default high-water mark, in messages.
+inline constexpr int kDefaultSendQueue = 1000;
+
 // PUB side of a tactile, event or ground-truth stream (topics: envelope.hpp).
 class Publisher {
  public:
   // With `security`, a CURVE server: only subscribers that know its public key receive.
+  // `send_queue`: messages kept for each subscriber that falls behind (ZeroMQ's SNDHWM); past it
+  // that subscriber's messages are dropped.
   Publisher(zmq::context_t& ctx, const std::string& endpoint,
-            const ServerSecurity* security = nullptr);
+            const ServerSecurity* security = nullptr, int send_queue = kDefaultSendQueue);
   // Sends [topic, payload]. Never blocks: past the high-water mark a PUB socket drops.
   void send(std::string_view topic, std::span<const std::uint8_t> payload);
   // The endpoint actually bound (a wildcard port resolved), e.g. "tcp://0.0.0.0:5555".
