@@ -289,7 +289,7 @@ class ArmServer:
         self,
         backend: ArmBackend,
         endpoint: str = "tcp://*:5556",
-        deadman_s: float = 0.04,
+        deadman_s: float = 0.4,
         heartbeat_period_s: float = 0.1,
         fingertip_ids: Sequence[str] = ("left", "right"),
         server_key: Optional[str] = None,
@@ -502,7 +502,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     p.add_argument("--endpoint", default="tcp://*:5556", help="ROUTER endpoint to bind")
     p.add_argument("--key", help="CURVE: the arm controller's key pair (NAME.key)")
     p.add_argument("--client", action="append", default=[], help="with --key, a client NAME.pub")
-    p.add_argument("--deadman", type=float, default=0.04, help="hold after this long silent (s)")
+    p.add_argument("--deadman", type=float, default=0.4, help="hold after this long silent (s)")
     p.add_argument("--heartbeat", type=float, default=0.1, help="heartbeat when quiet (s); 0: never")
     p.add_argument("--state-rate", type=float, default=100.0, help="ArmStates a second")
     p.add_argument("--fingertips", default="left,right", help="sensor ids of fingertip 0 and 1")

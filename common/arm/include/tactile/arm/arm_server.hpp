@@ -43,8 +43,9 @@ struct ArmServerOptions {
   std::string endpoint = "tcp://*:5556";
   // CURVE: the server's key pair and the client keys let in (docs/security.md).
   std::optional<wire::ServerSecurity> security;
-  // Hold the arm when the peer has been silent this long (s).
-  double deadman_s = 0.04;
+  // Hold the arm when the peer has been silent this long (s): four of hand_node's default
+  // heartbeat periods (0.1 s). The rig runs 0.04 s with hand_node heartbeating every 0.01 s.
+  double deadman_s = 0.4;
   // A Heartbeat to the peer when nothing was sent to it this long (s); 0: never.
   double heartbeat_period_s = 0.1;
   // The sensor ids of fingertip 0 and 1, as hand_node names them in FingerVelocities.
