@@ -42,7 +42,9 @@ TEST(ArmServerAllocations, ACommandAndAStateAllocateNothing) {
       ASSERT_TRUE(server.send_state(now));
       allocations = scope.count();
     }
-    if (i > 3) EXPECT_EQ(allocations, 0U) << "message " << i;  // after the buffers grew
+    if (i > 3) {
+      EXPECT_EQ(allocations, 0U) << "message " << i;  // after the buffers grew
+    }
   }
   EXPECT_EQ(server.counters().commands, 20U);
 }
