@@ -63,6 +63,13 @@ ArmServerOptions options() {
   return o;
 }
 
+// Each test's context and recording backend.
+class ArmServerOverSockets : public ::testing::Test {
+ protected:
+  zmq::context_t ctx;
+  RecordingArm arm;
+};
+
 // Waits (up to 2 s of real time) until the server has a message, and handles it at `now_ns`.
 bool serve_next(ArmServer& server, std::int64_t now_ns) {
   std::array<zmq::socket_ref, 1> s{server.socket()};
@@ -88,9 +95,7 @@ bool has_fault(const v1::ArmState& s, v1::ArmFault f) {
   return std::find(s.faults().begin(), s.faults().end(), f) != s.faults().end();
 }
 
-TEST(ArmServer, CommandsReachTheBackendAndTheStateNamesTheLast) {
-  zmq::context_t ctx;
-  RecordingArm arm;
+TEST_F(ArmServerOverSockets, CommandsReachTheBackendAndTheStateNamesTheLast) {
   ArmServer server(ctx, options(), arm);
   wire::Dealer hand(ctx, server.endpoint());
   EXPECT_FALSE(server.send_state(0));  // nobody to answer yet
@@ -108,9 +113,7 @@ TEST(ArmServer, CommandsReachTheBackendAndTheStateNamesTheLast) {
   EXPECT_EQ(server.counters().refused(), 0U);
 }
 
-TEST(ArmServer, TheDeadmanTripsOnceAndTheStatesSaySoUntilACommand) {
-  zmq::context_t ctx;
-  RecordingArm arm;
+TEST_F(ArmServerOverSockets, TheDeadmanTripsOnceAndTheStatesSaySoUntilACommand) {
   ArmServer server(ctx, options(), arm);
   wire::Dealer hand(ctx, server.endpoint());
   server.check_deadman(10'000 * kMs);  // no peer yet: no deadman
@@ -139,9 +142,7 @@ TEST(ArmServer, TheDeadmanTripsOnceAndTheStatesSaySoUntilACommand) {
   EXPECT_FALSE(has_fault(*resumed, v1::ARM_FAULT_DEADMAN));
 }
 
-TEST(ArmServer, AStrangersHeartbeatIsRefusedWhileThePeerIsAlive) {
-  zmq::context_t ctx;
-  RecordingArm arm;
+TEST_F(ArmServerOverSockets, AStrangersHeartbeatIsRefusedWhileThePeerIsAlive) {
   ArmServer server(ctx, options(), arm);
   wire::Dealer hand(ctx, server.endpoint());
   wire::Dealer stranger(ctx, server.endpoint());
@@ -160,9 +161,7 @@ TEST(ArmServer, AStrangersHeartbeatIsRefusedWhileThePeerIsAlive) {
   EXPECT_FALSE(state_at(stranger, 100ms));
 }
 
-TEST(ArmServer, GarbageAndBadCommandsAreCountedAndNeverReachTheArm) {
-  zmq::context_t ctx;
-  RecordingArm arm;
+TEST_F(ArmServerOverSockets, GarbageAndBadCommandsAreCountedAndNeverReachTheArm) {
   ArmServer server(ctx, options(), arm);
   wire::Dealer client(ctx, server.endpoint());
   const std::string junk = "\x08\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff not an envelope";
@@ -190,9 +189,7 @@ TEST(ArmServer, GarbageAndBadCommandsAreCountedAndNeverReachTheArm) {
   EXPECT_EQ(server.counters().invalid_commands, 2U);
 }
 
-TEST(ArmServer, HeartbeatsGoToThePeerWhenNothingElseDid) {
-  zmq::context_t ctx;
-  RecordingArm arm;
+TEST_F(ArmServerOverSockets, HeartbeatsGoToThePeerWhenNothingElseDid) {
   ArmServerOptions o = options();
   o.heartbeat_period_s = 0.1;
   ArmServer server(ctx, o, arm);
@@ -207,9 +204,7 @@ TEST(ArmServer, HeartbeatsGoToThePeerWhenNothingElseDid) {
   EXPECT_EQ(server.counters().heartbeats_sent, 2U);
 }
 
-TEST(ArmServer, BadSettingsThrowAtStartUp) {
-  zmq::context_t ctx;
-  RecordingArm arm;
+TEST_F(ArmServerOverSockets, BadSettingsThrowAtStartUp) {
   ArmServerOptions o = options();
   o.deadman_s = 0;
   EXPECT_THROW(ArmServer(ctx, o, arm), std::invalid_argument);
@@ -221,10 +216,8 @@ TEST(ArmServer, BadSettingsThrowAtStartUp) {
   EXPECT_THROW(ArmServer(ctx, o, arm), std::exception);
 }
 
-TEST(ArmServer, UnderCurveAClientNotInTheListIsRefused) {
+TEST_F(ArmServerOverSockets, UnderCurveAClientNotInTheListIsRefused) {
   if (!wire::curve_available()) GTEST_SKIP() << "libzmq without CURVE";
-  zmq::context_t ctx;
-  RecordingArm arm;
   const wire::CurveKeyPair arm_keys = wire::generate_keypair();
   const wire::CurveKeyPair hand_keys = wire::generate_keypair();
   const wire::CurveKeyPair other_keys = wire::generate_keypair();

@@ -1,4 +1,4 @@
-"""tactile_reader.arm's ArmServer over real sockets (tcp://127.0.0.1:*), as the C++ ArmServer.*
+"""tactile_reader.arm's ArmServer over real sockets (tcp://127.0.0.1:*), as the C++ ArmServerOverSockets.*
 tests: the deadman trips once, a stranger's heartbeat is refused while the peer is alive,
 garbage and bad commands are counted and never reach the arm, CURVE refuses a client not in the
 list. Time is the test's: every call gets the instant it is for.
