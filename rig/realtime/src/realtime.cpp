@@ -12,10 +12,12 @@
 #include <mutex>
 #include <thread>
 
+#include "tactile/arm/arm_server.hpp"
 #include "tactile/camera/fake_gv_camera.hpp"
 #include "tactile/control/config.hpp"
 #include "tactile/control/slip_detector.hpp"
 #include "tactile/rig/arm_link.hpp"
+#include "tactile/rig/control_link.hpp"
 #include "tactile/rig/optics.hpp"
 #include "tactile/rig/scoring.hpp"
 #include "tactile/rig/sensors.hpp"
@@ -169,8 +171,9 @@ class SentQueue {
 
 // A whole real-time run: the world stepped to the wall clock, the cameras fed, the arm link
 // served, sensor_node's frames and hand_node's events scored. One object per run: its members
-// are the run's state, its methods the loop's parts.
-class RealtimeRun {
+// are the run's state, its methods the loop's parts. The world's arm is the backend of the arm
+// controller (arm::ArmServer): read, write and hold step the world to their instant first.
+class RealtimeRun final : private arm::ArmBackend {
  public:
   RealtimeRun(const Scenario& sc, const RealtimeOptions& opt);
   RealtimeResult run();
@@ -181,8 +184,10 @@ class RealtimeRun {
     return run;
   }
   void advance_to(std::int64_t t_ns);
-  void on_arm_message(std::int64_t now_ns);
-  void check_deadman(std::int64_t now_ns);
+  // arm::ArmBackend.
+  wire::ArmStateData read(std::int64_t now_ns) override;
+  bool write(const wire::ReceivedCommand& command, std::int64_t now_ns) override;
+  void hold(std::int64_t now_ns) override;
   void on_frame();
   void on_event();
   // Serves the sockets until `render_ns` (or a stop).
@@ -221,7 +226,7 @@ class RealtimeRun {
   const Vec3 transport_;
 
   zmq::context_t ctx_;
-  wire::Router arm_;
+  arm::ArmServer arm_;
   std::optional<wire::Publisher> truth_pub_;
   wire::Subscriber frames_;
   std::optional<wire::Subscriber> events_;
@@ -231,23 +236,16 @@ class RealtimeRun {
   const WakeTimer render_timer_;
 
   // Reused buffers.
-  std::string from_;  // the sender of the message at hand
-  std::vector<std::uint8_t> payload_;
   wire::TopicMessage msg_;
   wire::EnvelopeDecoder decoder_;
   v1::Envelope truth_env_;
-  v1::Envelope state_env_;
   std::string out_;
-  wire::ReceivedCommand cmd_;
-  const wire::FingertipIds wire_ids_{kFingertipIds[0], kFingertipIds[1]};
   std::array<wire::ReceivedFrame, kFingertips> measured_;
   std::deque<KeptTruth> kept_;
   control::ArmMotionEstimator arm_motion_;
   std::vector<double> latencies_ms_;
 
   std::int64_t start_ns_ = 0;
-  ArmPeer arm_peer_;
-  std::uint64_t last_command_ = 0;
   control::Phase phase_ = control::Phase::kIdle;
   std::uint32_t twist_cycle_ = 0;
   bool ended_ = false;
@@ -256,6 +254,15 @@ class RealtimeRun {
   std::uint64_t frame_ = 0;
   std::uint64_t first_frame_ = 0;
 };
+
+arm::ArmServerOptions arm_server_options(const RealtimeOptions& opt) {
+  arm::ArmServerOptions o;
+  o.endpoint = opt.arm_endpoint;
+  o.security = opt.arm_security;
+  o.deadman_s = opt.deadman_s;
+  o.fingertip_ids = {kFingertipIds[0], kFingertipIds[1]};
+  return o;
+}
 
 CameraParams realtime_camera(const Scenario& sc, const RealtimeOptions& opt) {
   CameraParams cam = sc.camera;
@@ -275,10 +282,9 @@ RealtimeRun::RealtimeRun(const Scenario& sc, const RealtimeOptions& opt)
       sensors_(sc, cam_, world_.element_normals()),
       scorer_(with_calibrations(result_.run, sensors_), cfg_, opt.record_series),
       transport_(transport_direction(sc.world)),
-      arm_(ctx_, opt.arm_endpoint, opt.arm_security ? &*opt.arm_security : nullptr),
+      arm_(ctx_, arm_server_options(opt), *this),
       frames_(ctx_, opt.observe_frames, {wire::kFrameTopicPrefix},
-              opt.observe_security ? &*opt.observe_security : nullptr),
-      arm_peer_(static_cast<std::int64_t>(opt.deadman_s * 1e9)) {
+              opt.observe_security ? &*opt.observe_security : nullptr) {
   // Sensors: calibrations (written for sensor_node and hand_node) and cameras.
   const auto& ids = kFingertipIds;
   if (!opt.calibration_dir.empty())
@@ -328,61 +334,30 @@ void RealtimeRun::advance_to(std::int64_t t_ns) {
   }
 }
 
-void RealtimeRun::on_arm_message(std::int64_t now_ns) {
-  const auto st = decoder_.decode(payload_);
-  const v1::Envelope& env = decoder_.envelope();
-  if (st != wire::DecodeStatus::kOk) {
-    ++c_.invalid_commands;
-    return;
-  }
-  if (env.has_heartbeat()) {
-    const ArmPeer::Heard h = arm_peer_.heartbeat(from_, now_ns);
-    if (!h.accepted) {
-      ++c_.invalid_commands;  // another client's heartbeat while ours is alive: refused
-      return;
-    }
-    if (h.connected) util::log_info("hand_node connected");
-    // The old client fell silent and the arm is held: a new one (a restarted hand_node) takes
-    // over.
-    if (h.new_client) util::log_info("a new client takes over after the deadman hold");
-    return;
-  }
-  if (!env.has_arm_command() ||
-      wire::read_arm_command(env.arm_command(), wire_ids_, cmd_) != wire::DecodeStatus::kOk) {
-    ++c_.invalid_commands;
-    return;
-  }
-  const ArmPeer::Heard h = arm_peer_.command(from_, now_ns);
-  if (h.connected) util::log_info("hand_node connected");
-  if (h.new_client) util::log_warn("commands now come from another client");
-  if (h.resumed) util::log_info("hand_node commands again after the deadman hold");
-  ++c_.commands;
-  last_command_ = cmd_.sequence;
-  for (std::size_t i = 0; i < cmd_.answers.count; ++i) {
-    const std::int64_t cam_ts = cmd_.answers.refs[i].camera_timestamp_ns;
+wire::ArmStateData RealtimeRun::read(std::int64_t now_ns) {
+  return arm_state_of(world_, now_ns, 0);  // the server fills in the last command's sequence
+}
+
+bool RealtimeRun::write(const wire::ReceivedCommand& cmd, std::int64_t now_ns) {
+  for (std::size_t i = 0; i < cmd.answers.count; ++i) {
+    const std::int64_t cam_ts = cmd.answers.refs[i].camera_timestamp_ns;
     if (cam_ts <= 0) continue;
     const double ms = static_cast<double>(now_ns - cam_ts) * 1e-6;
     latencies_ms_.push_back(ms);
     // Answers older than a period are the tail of latency_ms: say which they were.
     if (now_ns - cam_ts > period_ns_) {
       util::log_debug("command {} answered frame {} of fingertip {} {:.2f} ms after its exposure",
-                      cmd_.sequence, cmd_.answers.refs[i].sequence, cmd_.answers.refs[i].fingertip,
+                      cmd.sequence, cmd.answers.refs[i].sequence, cmd.answers.refs[i].fingertip,
                       ms);
     }
   }
   advance_to(now_ns);  // the command acts from the moment it arrived
-  if (!world_.apply(to_world_command(cmd_.command))) ++c_.invalid_commands;
+  return world_.apply(to_world_command(cmd.command));
 }
 
-// Checked whenever the sockets are served (at most 5 ms apart), not only once per frame: at
-// 30 fps a check per frame would hold the arm up to a period late.
-void RealtimeRun::check_deadman(std::int64_t now_ns) {
-  if (!arm_peer_.deadman_trips(now_ns)) return;
-  ++c_.deadman_trips;
+void RealtimeRun::hold(std::int64_t now_ns) {
   advance_to(now_ns);  // the hold acts from the moment it was decided
   world_.apply(to_world_command(control::Command::hold()));
-  util::log_warn("deadman: nothing from hand_node for {:.0f} ms: arm held",
-                 static_cast<double>(now_ns - arm_peer_.last_heard_ns()) * 1e-6);
 }
 
 void RealtimeRun::on_frame() {
@@ -454,13 +429,13 @@ void RealtimeRun::serve_until(std::int64_t render_ns) {
                           render_timer_.fd());
     }
     now = util::realtime_ns();
-    while (arm_.receive(from_, payload_, milliseconds(0)))
-      on_arm_message(util::realtime_ns());
+    while (arm_.serve_one(util::realtime_ns())) {
+    }
     while (frames_.receive(msg_, milliseconds(0)))
       on_frame();
     while (events_ && events_->receive(msg_, milliseconds(0)))
       on_event();
-    check_deadman(util::realtime_ns());
+    arm_.check_deadman(util::realtime_ns());
     take_sent();
     publish_sent_truths(util::realtime_ns(), false);
     if (now >= render_ns || util::stop_requested()) break;
@@ -547,15 +522,7 @@ void RealtimeRun::publish_truth(KeptTruth& kept) {
 }
 
 bool RealtimeRun::answer_arm(std::int64_t now_ns) {
-  if (arm_peer_.has_peer()) {
-    wire::fill_arm_state(arm_state_of(world_, now_ns, last_command_), wire_ids_,
-                         *state_env_.mutable_arm_state());
-    if (arm_peer_.held()) state_env_.mutable_arm_state()->add_faults(v1::ARM_FAULT_DEADMAN);
-    wire::encode(state_env_, out_);
-    arm_.send(arm_peer_.peer(), wire::bytes_of(out_));
-    check_deadman(now_ns);
-    return true;
-  }
+  if (arm_.send_state(now_ns)) return true;
   if (now_ns - start_ns_ > static_cast<std::int64_t>(opt_.wait_for_hand_s * 1e9)) {
     rep_.end_reason = "no hand_node";
     return false;
@@ -587,6 +554,10 @@ void RealtimeRun::finish() {
   publish_sent_truths(0, true);
   for (const SentQueue& q : sent_)
     c_.sends_after_truth += q.dropped();
+  const arm::ArmServerCounters arm = arm_.counters();
+  c_.commands = arm.commands;
+  c_.invalid_commands = arm.refused();
+  c_.deadman_trips = arm.deadman_trips;
   if (util::stop_requested() && !ended_) rep_.end_reason = "stopped";
   scorer_.finish(world_.cap().dropped, static_cast<double>(util::realtime_ns() - start_ns_) * 1e-9,
                  frame_ - first_frame_);

@@ -180,6 +180,13 @@ struct RunResult {
   // The longest time without any message from hand_node on the arm link, after its first.
   std::chrono::steady_clock::duration max_silence{};
   testing::ProcessResult process;
+  // Against arm_bridge: the MoveTos hand_node sent (as it published them beside its events) and
+  // the ArmStates it received (likewise).
+  std::vector<control::MoveTo> moves;
+  std::vector<std::string> move_names;
+  std::vector<wire::ArmStateData> arm_states;
+  std::vector<std::size_t> states_before_command;  // arm_states.size() when each command came
+  testing::ProcessResult bridge;
 };
 
 // Runs hand_node against the simulated world. `script(world, frame)` returns, per fingertip, the
@@ -202,7 +209,7 @@ struct Flood {
 class HandNodeRun {
  public:
   explicit HandNodeRun(std::string controller_yaml = "", double heartbeat_period_s = 0.05,
-                       double control_period_s = 0.005) {
+                       double control_period_s = 0.005, double stale_after_s = 0.03) {
     for (std::size_t t = 0; t < 2; ++t) {
       cals_[t] = fingertip_calibration(kIds[t]);
       config::save_calibration(dir_ / (kIds[t] + ".yaml"), cals_[t]);
@@ -218,11 +225,21 @@ class HandNodeRun {
                                       << control_period_s
                                       << "\n"
                                          "controller:\n"
-                                         "  stale_after_s: 0.03\n"
+                                         "  stale_after_s: "
+                                      << stale_after_s
+                                      << "\n"
                                          // The scripts inject the paper's slips (one element
                                          // moving beyond dr) and no load transfer.
                                          "  slip_detector: paper\n"
                                       << controller_yaml;
+  }
+
+  // The arm controller is a real process (arm_bridge, the Python arm side) instead of this test:
+  // `command` (given --endpoint) with `env` added to its environment. The commands reach the
+  // simulated world through the copies hand_node publishes beside its events, and that process
+  // sends the ArmStates.
+  void use_arm_side(std::vector<std::string> command, std::vector<std::string> env = {}) {
+    arm_side_ = {std::move(command), std::move(env)};
   }
 
   RunResult run(const Script& script, std::chrono::milliseconds limit,
@@ -231,10 +248,19 @@ class HandNodeRun {
     wire::Router arm(ctx, "tcp://127.0.0.1:*");
     wire::Publisher sensors(ctx, "tcp://127.0.0.1:*");
     const std::string events_endpoint = "ipc://" + (dir_ / "events").string();
+    const bool bridged = arm_side_.has_value();
+    std::optional<Process> bridge;
+    std::string arm_endpoint = arm.endpoint();
+    if (bridged) {
+      arm_endpoint = "ipc://" + (dir_ / "arm").string();
+      std::vector<std::string> b = arm_side_->first;
+      b.insert(b.end(), {"--endpoint", arm_endpoint});
+      bridge.emplace(b, arm_side_->second);
+    }
     std::vector<std::string> args{
         TACTILE_HAND_NODE_PATH, "--config",         (dir_ / "hand.yaml").string(),
         "--subscribe",          sensors.endpoint(), "--arm",
-        arm.endpoint(),         "--events",         events_endpoint};
+        arm_endpoint,           "--events",         events_endpoint};
     // A valid frame to mutate.
     std::string valid;
     {
@@ -271,7 +297,9 @@ class HandNodeRun {
       });
     }
     testing::Garbage arm_garbage(valid, 11);
-    wire::Subscriber events(ctx, {events_endpoint}, {wire::kEventTopic});
+    std::vector<std::string> topics{wire::kEventTopic};
+    if (bridged) topics.insert(topics.end(), {wire::kCommandTopic, wire::kArmTopic});
+    wire::Subscriber events(ctx, {events_endpoint}, topics);
 
     SimWorld world(cals_);
     RunResult r;
@@ -290,45 +318,63 @@ class HandNodeRun {
     bool signalled = false;
     std::optional<std::chrono::steady_clock::time_point> last_heard;
     const double dt = 0.01;
+    const auto on_command = [&] {
+      if (wire::read_arm_command(env.arm_command(), kIds, cmd) != wire::DecodeStatus::kOk) return;
+      if (bridged) {
+        r.states_before_command.push_back(r.arm_states.size());
+        if (cmd.command.kind == control::CommandKind::kMoveTo) {
+          r.moves.push_back(cmd.command.move_to);
+          r.move_names.emplace_back(cmd.name.data());
+        }
+      }
+      last_command = cmd.sequence;
+      r.last_command_answers = cmd.answers.count;
+      world.apply(cmd.command);
+      r.commands.push_back(cmd.command.kind);
+      std::set<int> tips;
+      std::set<std::int64_t> exposures;
+      for (std::size_t i = 0; i < cmd.answers.count; ++i) {
+        exposures.insert(cmd.answers.refs[i].camera_timestamp_ns);
+        const auto& a = cmd.answers.refs[i];
+        if (a.fingertip < 0 ||
+            !published.count({kIds[static_cast<std::size_t>(a.fingertip)], a.sequence})) {
+          ++r.commands_naming_unknown_frames;
+        }
+        tips.insert(a.fingertip);
+      }
+      if (tips.size() == 2) ++r.commands_naming_both_sensors;
+      if (exposures.size() > 1) ++r.commands_answering_two_exposures;
+    };
+    const auto on_published = [&] {
+      if (wire::decode(ev.payload, env) != wire::DecodeStatus::kOk) return;
+      if (env.has_event()) {
+        r.events.push_back(env.event().kind());
+        r.event_cycles.push_back(env.event().cycle());
+      } else if (env.has_arm_command()) {
+        on_command();
+      } else if (env.has_arm_state()) {
+        wire::ArmStateData s;
+        if (wire::read_arm_state(env.arm_state(), kIds, s) == wire::DecodeStatus::kOk)
+          r.arm_states.push_back(s);
+      }
+    };
+    const auto until = [](std::chrono::steady_clock::time_point t) {
+      return std::chrono::duration_cast<std::chrono::milliseconds>(std::max(
+          t - std::chrono::steady_clock::now(), std::chrono::steady_clock::duration::zero()));
+    };
     while (std::chrono::steady_clock::now() < deadline && hand.running()) {
       // The frame period paces the simulation; commands are taken as they come.
       const auto frame_end = std::chrono::steady_clock::now() + 10ms;
-      while (arm.receive(peer, payload,
-                         std::chrono::duration_cast<std::chrono::milliseconds>(
-                             std::max(frame_end - std::chrono::steady_clock::now(),
-                                      std::chrono::steady_clock::duration::zero())))) {
+      while (!bridged && arm.receive(peer, payload, until(frame_end))) {
         const auto heard = std::chrono::steady_clock::now();
         if (last_heard) r.max_silence = std::max(r.max_silence, heard - *last_heard);
         last_heard = heard;
         if (wire::decode(payload, env) != wire::DecodeStatus::kOk) continue;
         if (env.has_heartbeat()) ++r.heartbeats;
-        if (!env.has_arm_command()) continue;
-        if (wire::read_arm_command(env.arm_command(), kIds, cmd) != wire::DecodeStatus::kOk)
-          continue;
-        last_command = cmd.sequence;
-        r.last_command_answers = cmd.answers.count;
-        world.apply(cmd.command);
-        r.commands.push_back(cmd.command.kind);
-        std::set<int> tips;
-        std::set<std::int64_t> exposures;
-        for (std::size_t i = 0; i < cmd.answers.count; ++i) {
-          exposures.insert(cmd.answers.refs[i].camera_timestamp_ns);
-          const auto& a = cmd.answers.refs[i];
-          if (a.fingertip < 0 ||
-              !published.count({kIds[static_cast<std::size_t>(a.fingertip)], a.sequence})) {
-            ++r.commands_naming_unknown_frames;
-          }
-          tips.insert(a.fingertip);
-        }
-        if (tips.size() == 2) ++r.commands_naming_both_sensors;
-        if (exposures.size() > 1) ++r.commands_answering_two_exposures;
+        if (env.has_arm_command()) on_command();
       }
-      while (events.receive(ev, 0ms)) {
-        if (wire::decode(ev.payload, env) == wire::DecodeStatus::kOk && env.has_event()) {
-          r.events.push_back(env.event().kind());
-          r.event_cycles.push_back(env.event().cycle());
-        }
-      }
+      while (events.receive(ev, bridged ? until(frame_end) : 0ms))
+        on_published();
       if (!signalled && sigterm_after_commands >= 0 &&
           static_cast<int>(r.commands.size()) > sigterm_after_commands) {
         hand.signal(SIGTERM);
@@ -368,11 +414,11 @@ class HandNodeRun {
     if (flood_thread.joinable()) flood_thread.join();
     r.process = hand.wait(5s);
     // Late events and commands (Stop on the way out).
-    while (events.receive(ev, 50ms)) {
-      if (wire::decode(ev.payload, env) == wire::DecodeStatus::kOk && env.has_event()) {
-        r.events.push_back(env.event().kind());
-        r.event_cycles.push_back(env.event().cycle());
-      }
+    while (events.receive(ev, 50ms))
+      on_published();
+    if (bridge) {
+      bridge->signal(SIGTERM);
+      r.bridge = bridge->wait(5s);
     }
     while (arm.receive(peer, payload, 50ms)) {
       if (wire::decode(payload, env) == wire::DecodeStatus::kOk && env.has_arm_command() &&
@@ -390,6 +436,7 @@ class HandNodeRun {
  private:
   TempDir dir_;
   std::array<Calibration, 2> cals_;
+  std::optional<std::pair<std::vector<std::string>, std::vector<std::string>>> arm_side_;
 };
 
 std::vector<v1::EventKind> without(std::vector<v1::EventKind> v,
@@ -467,6 +514,76 @@ TEST(HandNode, RunsThePapersTaskAndEndsDone) {
   EXPECT_EQ(r.commands_answering_two_exposures, 0U);
   EXPECT_EQ(r.commands.back(), control::CommandKind::kStop);
   EXPECT_GT(r.heartbeats, 0U);
+}
+
+// Phase I (grasp-move-release) with `arm_command` (a real process given --endpoint) as the arm
+// controller: hand_node, that process and this test's frames over real sockets. A kinematic arm
+// reports every MoveTo done exactly at its target and the release's Open by its distance.
+void expect_phase_one_against(std::vector<std::string> arm_command,
+                              std::vector<std::string> env = {}) {
+  // Stale only after 0.25 s: this test is about the arm side, and a stale hold on a loaded
+  // machine (this process not publishing for 30 ms) would interrupt the Open it measures.
+  HandNodeRun run(
+      "  task: grasp_move_release\n"
+      "  move_speed_mps: 0.5\n"
+      "  lift_speed_mps: 0.5\n"
+      "  carry_speed_mps: 0.5\n",
+      0.05, 0.005, 0.25);
+  arm_command.insert(arm_command.end(),
+                     {"--deadman", "0.2", "--start", "0.30,-0.10,0.20,0", "--finger-open", "0.02"});
+  run.use_arm_side(std::move(arm_command), std::move(env));
+  const RunResult r = run.run(paper_story, 30s);
+  ASSERT_FALSE(r.process.timed_out) << r.process.err;
+  EXPECT_EQ(r.process.exit_code, 0) << r.process.err << r.bridge.err;
+  EXPECT_EQ(r.bridge.exit_code, 0) << r.bridge.err;
+  const auto seq =
+      without(r.events, {v1::EVENT_KIND_PHASE, v1::EVENT_KIND_TOUCH, v1::EVENT_KIND_RECOMPRESS});
+  const std::vector<v1::EventKind> want{v1::EVENT_KIND_GRASPING_ENDED,
+                                        v1::EVENT_KIND_GRASP_CLASSIFIED,
+                                        v1::EVENT_KIND_RELEASE_CLASSIFIED, v1::EVENT_KIND_DONE};
+  EXPECT_EQ(seq, want) << r.process.err;
+  // Phase I's motions in order (a segment resumed after a hold comes again: folded).
+  std::vector<std::string> names = r.move_names;
+  names.erase(std::unique(names.begin(), names.end()), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"MOVE1", "MOVE2", "MOVE3", "MOVE4", "MOVE5", "MOVE6"}))
+      << r.process.err;
+  // Every segment but the lowering (ended by the release, not by its target) was reported done,
+  // exactly at its target.
+  for (std::size_t i = 0; i < r.moves.size(); ++i) {
+    if (r.move_names[i] == "MOVE5") continue;
+    const control::MoveTo& m = r.moves[i];
+    const auto done = std::find_if(r.arm_states.begin(), r.arm_states.end(), [&](const auto& s) {
+      return s.active_segment_id == m.segment_id && s.segment_done;
+    });
+    ASSERT_NE(done, r.arm_states.end()) << r.move_names[i];
+    EXPECT_DOUBLE_EQ(done->wrist.position_m.x, m.target.position_m.x) << r.move_names[i];
+    EXPECT_DOUBLE_EQ(done->wrist.position_m.y, m.target.position_m.y) << r.move_names[i];
+    EXPECT_DOUBLE_EQ(done->wrist.position_m.z, m.target.position_m.z) << r.move_names[i];
+    EXPECT_DOUBLE_EQ(done->wrist.yaw_rad, m.target.yaw_rad) << r.move_names[i];
+  }
+  // The release opened both fingertips by open_distance_m (4 mm): from the last state before
+  // the Open to the last of the run (a state before the Open may still show 10 ms of motion).
+  const auto open = std::find(r.commands.begin(), r.commands.end(), control::CommandKind::kOpen);
+  ASSERT_NE(open, r.commands.end());
+  const std::size_t before =
+      r.states_before_command[static_cast<std::size_t>(open - r.commands.begin())];
+  ASSERT_GT(before, 0U);
+  ASSERT_GT(r.arm_states.size(), before);
+  const wire::ArmStateData& closed = r.arm_states[before - 1];
+  const wire::ArmStateData& opened = r.arm_states.back();
+  EXPECT_NEAR(opened.fingertip_position_m[0].x - closed.fingertip_position_m[0].x, -0.004, 2e-4);
+  EXPECT_NEAR(opened.fingertip_position_m[1].x - closed.fingertip_position_m[1].x, 0.004, 2e-4);
+  // Nothing hand_node sent was refused.
+  EXPECT_NE(r.bridge.err.find("(refused 0:"), std::string::npos) << r.bridge.err;
+}
+
+TEST(HandNode, RunsPhaseOneAgainstArmBridge) {
+  expect_phase_one_against({TACTILE_ARM_BRIDGE_PATH});
+}
+
+TEST(HandNode, RunsPhaseOneAgainstThePythonArmSide) {
+  expect_phase_one_against({TACTILE_PYTHON3, "-m", "tactile_reader.arm"},
+                           {std::string("PYTHONPATH=") + TACTILE_PYTHON_PATH});
 }
 
 TEST(HandNode, HoldsOnStaleDataAndResumes) {

@@ -1,13 +1,10 @@
 #pragma once
 
-// The rig's side of the arm link (docs/system.md, "The rig in real time"): wire commands into
-// world commands, the world into ArmState, and who the arm answers with its deadman. Pure: time
-// is an argument, nothing here reads a clock or touches a socket.
+// The rig's side of the arm link (docs/system.md, "The rig in real time"): the world's arm as an
+// ArmState. Who the arm answers and its deadman are arm::ArmServer's (common/arm); the world is
+// its backend. Pure: time is an argument, nothing here reads a clock or touches a socket.
 #include <cstdint>
-#include <string>
-#include <string_view>
 
-#include "tactile/rig/control_link.hpp"
 #include "tactile/rig/world.hpp"
 #include "tactile/wire/arm.hpp"
 
@@ -16,46 +13,5 @@ namespace tactile::rig {
 // The world's arm as an ArmState.
 wire::ArmStateData arm_state_of(const World& world, std::int64_t time_ns,
                                 std::uint64_t last_command_sequence);
-
-// The client the arm answers (its peer) and the deadman that holds the arm when that client
-// falls silent. The peer is the first client that spoke (a heartbeat) or the last that sent a
-// valid command; garbage never changes it, and only its words keep the deadman from tripping.
-// The hold lasts until a client commands again (its ArmStates carry the fault meanwhile).
-class ArmPeer {
- public:
-  // What a message changed, for the log.
-  struct Heard {
-    bool accepted = false;    // false: refused (another client's heartbeat while ours is alive)
-    bool connected = false;   // the first client
-    bool new_client = false;  // another client than the peer: it takes over
-    bool resumed = false;     // a command after the deadman hold: the hold ends
-  };
-
-  explicit ArmPeer(std::int64_t deadman_ns) : deadman_ns_(deadman_ns) {}
-
-  // A heartbeat from `from` at `now_ns`. Another client's heartbeat takes over only while the
-  // arm is held for the old peer's silence (a restarted hand_node).
-  Heard heartbeat(std::string_view from, std::int64_t now_ns);
-  // A valid command from `from` at `now_ns`: its sender becomes the peer.
-  Heard command(std::string_view from, std::int64_t now_ns);
-  // True once, at the first `now_ns` the peer has been silent longer than the deadman: hold the
-  // arm now. Never before a peer spoke.
-  bool deadman_trips(std::int64_t now_ns);
-
-  bool has_peer() const { return has_peer_; }
-  const std::string& peer() const { return peer_; }
-  // The arm is held for the peer's silence (ARM_FAULT_DEADMAN).
-  bool held() const { return held_; }
-  std::int64_t last_heard_ns() const { return last_heard_ns_; }
-
- private:
-  void heard(std::string_view from, std::int64_t now_ns);
-
-  std::int64_t deadman_ns_;
-  std::string peer_;
-  bool has_peer_ = false;
-  bool held_ = false;
-  std::int64_t last_heard_ns_ = 0;
-};
 
 }  // namespace tactile::rig

@@ -1,12 +1,12 @@
-// Who the arm answers and its deadman (docs/system.md, "The rig in real time"), with time as
-// an argument: no clock, no socket.
-#include "tactile/rig/arm_link.hpp"
+// Who the arm answers and its deadman (docs/arm.md, "Timing"), with time as an argument: no
+// clock, no socket.
+#include "tactile/arm/arm_peer.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cstdint>
 
-namespace tactile::rig {
+namespace tactile::arm {
 namespace {
 
 constexpr std::int64_t kMs = 1'000'000;
@@ -100,4 +100,4 @@ TEST(ArmPeer, TheSamePeerCommandingAgainEndsTheHold) {
 }
 
 }  // namespace
-}  // namespace tactile::rig
+}  // namespace tactile::arm
