@@ -77,6 +77,12 @@ WebServer::WebServer(const ServerOptions& o, UpdateSlot& slot)
   // One thread per event stream and two for everything else: a bounded number of threads.
   const auto threads = static_cast<std::size_t>(max_viewers_ + 2);
   s.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+  // SO_REUSEADDR only: httplib's default adds SO_REUSEPORT, with which a second tactile_web on
+  // the same port would start and share the connections instead of failing.
+  s.set_socket_options([](socket_t sock) {
+    const int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   s.set_write_timeout(2, 0);  // a browser that stops reading is let go
   s.set_keep_alive_timeout(2);
   auto asset = [&s](const char* path, std::string_view body, const char* type) {
@@ -112,9 +118,13 @@ WebServer::WebServer(const ServerOptions& o, UpdateSlot& slot)
         "text/event-stream",
         [this, st](std::size_t, httplib::DataSink& sink) {
           switch (slot_.wait_newer(st->seen, st->update, std::chrono::milliseconds(500))) {
-            case UpdateSlot::Wait::kClosed:
+            case UpdateSlot::Wait::kClosed: {
+              // Tells the page the program stopped, so that it stops reconnecting.
+              static constexpr std::string_view kEnd = "event: end\ndata: {}\n\n";
+              sink.write(kEnd.data(), kEnd.size());
               sink.done();
-              return false;
+              return true;
+            }
             case UpdateSlot::Wait::kTimeout:
               return sink.write(": idle\n\n", 8);  // finds a closed connection
             case UpdateSlot::Wait::kNew:

@@ -21,6 +21,9 @@ let windowStart = performance.now();
 let windowCount = 0;
 let perSecond = 0;
 let frozen = false;
+// Shear arrows: one element spacing long for the largest shear seen so far (at least 5 mN), a
+// scale that only grows, so that arrows stay comparable over a run; the legend says the scale.
+let shearFullN = 0.005;
 
 function fmt(v, digits) { return Number(v).toFixed(digits); }
 
@@ -161,9 +164,8 @@ function drawFingertip(f, s) {
     v.c.setAttribute('r', fmt(r, 2));
     v.c.setAttribute('class', 'element' + (e.contact ? '' : ' nocontact') + (e.slip ? ' slip' : ''));
     v.c.setAttribute('fill', e.contact ? colour(ratio) : '#bdbdbd');
-    // Shear arrow: F2 of shear would be 1.6 element spacings long.
-    const sx = e.fx / s.f2_n * d.spacing * 1.6;
-    const sy = e.fy / s.f2_n * d.spacing * 1.6;
+    const sx = e.fx / shearFullN * d.spacing;
+    const sy = e.fy / shearFullN * d.spacing;
     const shown = e.contact && Math.hypot(sx, sy) > 0.3;
     v.line.setAttribute('x1', fmt(v.cx, 2));
     v.line.setAttribute('y1', fmt(v.cy, 2));
@@ -200,6 +202,12 @@ function draw(s) {
   document.getElementById('cycle').textContent = s.cycle > 0 ? 'twist cycle ' + s.cycle : '';
   setFlag(document.getElementById('flag-SEARCH'), kSearchPhases.includes(s.phase), false);
   setFlag(document.getElementById('flag-MOVE'), kMovePhases.includes(s.phase), false);
+  for (const f of s.fingertips) {
+    for (const e of f.elements) {
+      if (e.contact) shearFullN = Math.max(shearFullN, Math.hypot(e.fx, e.fy));
+    }
+  }
+  document.getElementById('shear-scale').textContent = fmt(shearFullN * 1000, 1) + ' mN';
   for (const f of s.fingertips) drawFingertip(f, s);
   addEvents(s);
   if (t0 === null) t0 = s.time_ns;
@@ -241,6 +249,13 @@ stream.onerror = () => {
   status.textContent = 'connection lost, retrying';
   status.className = 'status lost';
 };
+stream.addEventListener('end', () => {
+  stream.close();
+  if (frozen) return;
+  status.textContent = 'tactile_web stopped';
+  status.className = 'status lost';
+  document.body.dataset.ended = '1';
+});
 stream.onmessage = (m) => {
   if (frozen) return;
   const s = JSON.parse(m.data);
