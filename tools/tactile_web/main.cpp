@@ -12,24 +12,18 @@
 #include "server.hpp"
 #include "snapshot.hpp"
 #include "tactile/cli/run.hpp"
-#include "tactile/config/calibration_file.hpp"
 #include "tactile/recording/sources.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
 #include "tactile/wire/envelope.hpp"
 #include "tactile/wire/sockets.hpp"
+#include "viewer.hpp"
 
 namespace {
 
 struct Options {
-  std::vector<std::string> endpoints;
-  std::vector<std::string> curve;
-  std::string client_key;
-  std::vector<std::string> calibrations;
-  double f1 = tactile::control::Config{}.f1_n;
-  double f2 = tactile::control::Config{}.f2_n;
-  double dr = tactile::control::Config{}.dr_mm;
+  tactile::live::ViewerOptions viewer;
   std::string listen = "127.0.0.1:8080";
   double rate_hz = 30;
   int max_viewers = 4;
@@ -54,34 +48,14 @@ int run(const Options& opt) {
   web.listen = tactile::web::parse_listen(opt.listen);
   web.chart_js = opt.chart_js;
   web.max_viewers = opt.max_viewers;
-  std::vector<tactile::Calibration> cals;
-  std::vector<std::string> warnings;
-  for (const auto& c : opt.calibrations)
-    cals.push_back(tactile::config::load_calibration(c, &warnings));
-  for (const auto& w : warnings)
-    tactile::util::log_warn("{}", w);
-
-  tactile::recording::SourceOptions so;
-  so.endpoints = opt.endpoints;
-  for (const auto& c : opt.curve)
-    so.curve.push_back(tactile::recording::parse_curve_source(c));
-  so.client_key = opt.client_key;
-  so.topics = {tactile::wire::kFrameTopicPrefix, tactile::wire::kStatsTopicPrefix,
-               tactile::wire::kEventTopic};
-  so.max_message_bytes = std::int64_t{4} << 20;
-  so.receive_hwm = 10000;
+  std::vector<tactile::Calibration> cals = tactile::live::load_calibrations(opt.viewer);
+  const tactile::recording::SourceOptions so = tactile::live::viewer_sources(opt.viewer);
   tactile::util::install_stop_handlers();
   zmq::context_t ctx;
   tactile::recording::Sources sources(ctx, so);
-  std::vector<std::string> eps;
-  for (std::size_t i = 0; i < sources.size(); ++i)
-    eps.push_back(sources.endpoint(i));
 
-  tactile::control::Config cc;
-  cc.f1_n = opt.f1;
-  cc.f2_n = opt.f2;
-  cc.dr_mm = opt.dr;
-  tactile::live::LiveModel model({cc, opt.events}, eps);
+  const tactile::control::Config cc = tactile::live::flag_thresholds(opt.viewer);
+  tactile::live::LiveModel model({cc, opt.events}, tactile::live::endpoints_of(sources));
   tactile::web::SnapshotWriter writer(std::move(cals), cc);
   tactile::web::UpdateSlot slot;
   tactile::web::WebServer server(web, slot);
@@ -155,19 +129,7 @@ int main(int argc, char** argv) {
       "fingertip's elements as in the paper's Fig. 3 (force as colour and size, shear as arrows, "
       "slip marked), the flags, hand_node's phase and events, and rolling plots of force and "
       "slip, updated by Server-Sent Events. Bound to localhost unless --listen says otherwise."};
-  app.add_option("endpoints", opt.endpoints,
-                 "publishers: sensor_node (frames, stats) and hand_node's events endpoint");
-  app.add_option("--curve", opt.curve,
-                 "ENDPOINT=SERVER.pub: subscribe with CURVE (repeatable; docs/security.md)")
-      ->allow_extra_args(false);
-  app.add_option("--client-key", opt.client_key, "this program's CURVE key pair (.key)");
-  app.add_option("--calibration", opt.calibrations,
-                 "calibration files: draw the elements where their disks are (default: rings of "
-                 "1, 8, 16, 16)")
-      ->allow_extra_args(false);
-  app.add_option("--f1", opt.f1, "F1 [N] for TOUCH")->capture_default_str();
-  app.add_option("--f2", opt.f2, "F2 [N] for OVER and the colour scale")->capture_default_str();
-  app.add_option("--dr", opt.dr, "dr [mm] for SLIP")->capture_default_str();
+  tactile::live::add_viewer_options(app, opt.viewer, "F2 [N] for OVER and the colour scale");
   app.add_option("--listen", opt.listen,
                  "HOST:PORT to serve on (port 0: any free one, printed at start)")
       ->capture_default_str();
@@ -184,8 +146,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   tactile::cli::add_log_level(app, opt.log_level);
   return tactile::cli::run(app, argc, argv, [&] {
-    if (opt.endpoints.empty() && opt.curve.empty())
-      throw tactile::cli::UsageError("give at least one endpoint to subscribe to");
+    tactile::live::require_endpoints(opt.viewer);
     return run(opt);
   });
 }
