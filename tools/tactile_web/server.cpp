@@ -30,6 +30,7 @@ UpdateSlot::Wait UpdateSlot::wait_newer(std::uint64_t& seen, std::string& out,
   if (closed_) return Wait::kClosed;
   if (seen > 0) coalesced_ += version_ - seen - 1;
   seen = version_;
+  if (out.capacity() < latest_.capacity()) out.reserve(latest_.capacity());
   out = latest_;
   return Wait::kNew;
 }

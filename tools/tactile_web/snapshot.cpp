@@ -45,6 +45,10 @@ const std::vector<std::array<double, 2>>& SnapshotWriter::layout(const live::Fin
 }
 
 void SnapshotWriter::write(const live::LiveState& s, const UpdateCounters& c, std::string& out) {
+  // Room for two fingertips of 41 elements and the latest events from the first update on, so
+  // that the buffers passed around do not grow update by update (docs/architecture.md, rule 4).
+  constexpr std::size_t kRoom = 64 << 10;
+  if (out.capacity() < kRoom) out.reserve(kRoom);
   out.clear();
   auto o = std::back_inserter(out);
   fmt::format_to(o, R"({{"update":{},"coalesced":{},"streams":{},"time_ns":{},"messages":{},)",
