@@ -132,7 +132,17 @@ int main(int argc, char** argv) {
   tactile::live::add_viewer_options(app, opt.viewer, "F2 [N] for OVER and the colour scale");
   app.add_option("--listen", opt.listen,
                  "HOST:PORT to serve on (port 0: any free one, printed at start)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            try {
+              tactile::web::parse_listen(text);
+              return {};
+            } catch (const std::invalid_argument& e) {
+              return e.what();
+            }
+          },
+          "HOST:PORT", "listen address"));
   app.add_option("--rate", opt.rate_hz, "updates per second at most (0: one after every message)")
       ->capture_default_str();
   app.add_option("--max-viewers", opt.max_viewers, "browsers served at a time")

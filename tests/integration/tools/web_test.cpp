@@ -167,5 +167,32 @@ TEST(Web, ChromiumShowsTheRecordingsFlagsPhaseAndForcesAtAFrame) {
   EXPECT_EQ(stopped.exit_code, 0) << stopped.err;
 }
 
+// The start-up errors: a bad --listen is a usage error (2); Chart.js missing and a port in use
+// (also by another tactile_web) are failures (1), each one line naming what to fix.
+TEST(Web, RefusesABadListenAMissingChartJsAndAPortInUse) {
+  auto r = testing::run({TACTILE_WEB_PATH, "tcp://127.0.0.1:9", "--listen", "8080"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--listen '8080': expected HOST:PORT"), std::string::npos) << r.err;
+  r = testing::run({TACTILE_WEB_PATH, "tcp://127.0.0.1:9", "--listen", "127.0.0.1:0", "--chart-js",
+                    "/nonexistent/chart.min.js"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err,
+            "tactile_web: /nonexistent/chart.min.js: not found; the page's charts come from "
+            "Debian's package libjs-chart.js (apt-get install libjs-chart.js)\n");
+  r = testing::run({TACTILE_WEB_PATH});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("tactile_web: give at least one endpoint"), std::string::npos) << r.err;
+
+  Process first({TACTILE_WEB_PATH, "tcp://127.0.0.1:9", "--listen", "127.0.0.1:0"});
+  const auto url =
+      await_match([&] { return first.out_so_far(); }, "serving http://127.0.0.1:(\\d+)/");
+  ASSERT_TRUE(url) << first.err_so_far();
+  r = testing::run({TACTILE_WEB_PATH, "tcp://127.0.0.1:9", "--listen", "127.0.0.1:" + *url});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("cannot listen on 127.0.0.1:" + *url), std::string::npos) << r.err;
+  first.signal(SIGTERM);
+  EXPECT_EQ(first.wait(10s).exit_code, 0);
+}
+
 }  // namespace
 }  // namespace tactile
