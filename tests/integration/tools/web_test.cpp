@@ -2,8 +2,13 @@
 // tactile_web, headless Chromium loads the page held at that frame (?freeze=SEQUENCE), and what
 // the page wrote into the DOM is checked against the recording: the flags and phase at that
 // frame, and a chosen element's force and shear.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <poll.h>
 #include <signal.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -192,6 +197,91 @@ TEST(Web, RefusesABadListenAMissingChartJsAndAPortInUse) {
   EXPECT_NE(r.err.find("cannot listen on 127.0.0.1:" + *url), std::string::npos) << r.err;
   first.signal(SIGTERM);
   EXPECT_EQ(first.wait(10s).exit_code, 0);
+}
+
+// A connection to 127.0.0.1:port that sent `request` and reads only when asked: with a tiny
+// receive buffer it stands for a browser that stopped reading.
+class RawClient {
+ public:
+  RawClient(int port, const std::string& request) {
+    fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
+    const int small = 1024;
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    connected_ = ::connect(fd_, reinterpret_cast<const sockaddr*>(&a), sizeof a) == 0 &&
+                 ::send(fd_, request.data(), request.size(), MSG_NOSIGNAL) ==
+                     static_cast<ssize_t>(request.size());
+  }
+  ~RawClient() { ::close(fd_); }
+  RawClient(const RawClient&) = delete;
+  RawClient& operator=(const RawClient&) = delete;
+  bool connected() const { return connected_; }
+  // What arrives within `timeout` (bounded), up to `max` bytes.
+  std::string read(std::chrono::milliseconds timeout, std::size_t max = 1 << 16) {
+    std::string out;
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    char buf[4096];
+    while (out.size() < max && std::chrono::steady_clock::now() < deadline) {
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, 20) <= 0) continue;
+      const auto n = ::recv(fd_, buf, sizeof buf, 0);
+      if (n <= 0) break;
+      out.append(buf, static_cast<std::size_t>(n));
+    }
+    return out;
+  }
+
+ private:
+  int fd_ = -1;
+  bool connected_ = false;
+};
+
+// Two browsers that stopped reading hold the only two event streams: a third is refused (503),
+// and every message still goes through the model (GET /state counts them) while they hang.
+TEST(Web, StuckBrowsersNeverHoldUpTheSubscriberAndViewersAreBounded) {
+  TempDir dir;
+  const auto log_path = dir / "run.tlog";
+  tools_test::write_test_log(log_path, false);
+  Process replay({TACTILE_REPLAY_PATH, log_path.string(), "--publish", "tcp://127.0.0.1:*",
+                  "--as-fast-as-possible", "--wait-subscriptions", "3", "--wait-timeout", "20"});
+  const auto endpoint =
+      await_match([&] { return replay.err_so_far(); }, "publishing on (tcp://\\S+)");
+  ASSERT_TRUE(endpoint) << replay.err_so_far();
+  Process web({TACTILE_WEB_PATH, *endpoint, "--listen", "127.0.0.1:0", "--max-viewers", "2",
+               "--rate", "0"});
+  const auto port =
+      await_match([&] { return web.out_so_far(); }, "serving http://127.0.0.1:(\\d+)/");
+  ASSERT_TRUE(port) << web.err_so_far();
+  const int p = std::stoi(*port);
+  const std::string stream = "GET /stream HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
+  RawClient stuck1(p, stream);
+  RawClient stuck2(p, stream);
+  ASSERT_TRUE(stuck1.connected() && stuck2.connected());
+  // Both streams are open once each has its first bytes (then they are never read again).
+  EXPECT_NE(stuck1.read(5s, 100).find("200 OK"), std::string::npos);
+  EXPECT_NE(stuck2.read(5s, 100).find("200 OK"), std::string::npos);
+  RawClient third(p, stream);
+  EXPECT_NE(third.read(5s).find("HTTP/1.1 503"), std::string::npos);
+
+  const auto played = replay.wait(20s);
+  ASSERT_EQ(played.exit_code, 0) << played.err;
+  // 100 frames of two fingertips and 4 events, about 2 MB of updates for each stream: all taken
+  // in while both stuck streams are still open (a stuck stream is let go only after 2 s of not
+  // taking its update).
+  const auto taken = await_match(
+      [&] {
+        RawClient c(p, "GET /state HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
+        return c.read(2s);
+      },
+      "\"streams\":(\\d+),\"time_ns\":\\d+,\"messages\":204,", 10s);
+  ASSERT_TRUE(taken) << "tactile_web did not take in every message";
+  EXPECT_EQ(*taken, "2");
+  web.signal(SIGINT);
+  const auto stopped = web.wait(10s);
+  EXPECT_EQ(stopped.exit_code, 0) << stopped.err;
 }
 
 }  // namespace
