@@ -418,6 +418,8 @@ int LiveModel::add(std::string_view topic, std::span<const std::uint8_t> payload
         r.has_displacement = e.has_displacement();
         r.dx_mm = e.dx_mm();
         r.dy_mm = e.dy_mm();
+        r.fx = e.fx_n();
+        r.fy = e.fy_n();
         r.fz = e.fz_n();
       }
       control::FingertipInput in;
@@ -427,9 +429,9 @@ int LiveModel::add(std::string_view topic, std::span<const std::uint8_t> payload
       const double dr = flags_.dr(twist_phase_);
       for (std::size_t i = 0; i < n; ++i) {
         const ElementReading& r = readings_[i];
-        f.elements[i] = {r.id, r.contact,
-                         r.contact && r.has_displacement && std::hypot(r.dx_mm, r.dy_mm) > dr,
-                         r.fz};
+        f.elements[i] = {
+            r.id, r.contact, r.contact && r.has_displacement && std::hypot(r.dx_mm, r.dy_mm) > dr,
+            r.fz, r.fx,      r.fy};
       }
       f.touch = fl.touch;
       f.slip = fl.slip;
@@ -467,6 +469,7 @@ int LiveModel::add(std::string_view topic, std::span<const std::uint8_t> payload
         d.pop_back();
       line.detail = std::move(d);
       state_.events.push_back(std::move(line));
+      ++state_.events_total;
       while (state_.events.size() > options_.max_events)
         state_.events.pop_front();
       return static_cast<int>(state_.events.size()) - 1;

@@ -26,6 +26,8 @@ struct ElementCell {
   bool contact = false;
   bool slip = false;  // in contact and moving more than dr this frame
   double fz_n = 0;
+  double fx_n = 0;  // shear force F_x, F_y
+  double fy_n = 0;
 };
 
 struct FingertipView {
@@ -63,7 +65,8 @@ struct LiveState {
   std::vector<FingertipView> fingertips;
   std::string phase = "-";
   std::uint32_t cycle = 0;
-  std::deque<EventLine> events;  // newest last
+  std::deque<EventLine> events;    // newest last
+  std::uint64_t events_total = 0;  // every event so far: the newest is number events_total - 1
   std::vector<TopicRate> rates;
   std::uint64_t messages = 0;
   std::uint64_t undecodable = 0;

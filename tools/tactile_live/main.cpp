@@ -14,24 +14,18 @@
 
 #include "dashboard.hpp"
 #include "tactile/cli/run.hpp"
-#include "tactile/config/calibration_file.hpp"
 #include "tactile/recording/sources.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
 #include "tactile/wire/envelope.hpp"
 #include "tactile/wire/sockets.hpp"
+#include "viewer.hpp"
 
 namespace {
 
 struct Options {
-  std::vector<std::string> endpoints;
-  std::vector<std::string> curve;
-  std::string client_key;
-  std::vector<std::string> calibrations;
-  double f1 = tactile::control::Config{}.f1_n;
-  double f2 = tactile::control::Config{}.f2_n;
-  double dr = tactile::control::Config{}.dr_mm;
+  tactile::live::ViewerOptions viewer;
   double refresh_s = 1.0 / 15.0;
   double interval_s = 1.0;
   double duration_s = 0;
@@ -68,42 +62,22 @@ int run(const Options& opt) {
     throw std::invalid_argument("--silence-timeout must not be negative");
   if (opt.plain && opt.screen)
     throw std::invalid_argument("--plain and --screen exclude each other");
-  std::vector<tactile::Calibration> cals;
-  std::vector<std::string> warnings;
-  for (const auto& c : opt.calibrations)
-    cals.push_back(tactile::config::load_calibration(c, &warnings));
-  for (const auto& w : warnings)
-    tactile::util::log_warn("{}", w);
-
-  tactile::recording::SourceOptions so;
-  so.endpoints = opt.endpoints;
-  for (const auto& c : opt.curve)
-    so.curve.push_back(tactile::recording::parse_curve_source(c));
-  so.client_key = opt.client_key;
-  so.topics = {tactile::wire::kFrameTopicPrefix, tactile::wire::kStatsTopicPrefix,
-               tactile::wire::kEventTopic};
-  so.max_message_bytes = std::int64_t{4} << 20;
-  so.receive_hwm = 10000;
+  const std::vector<tactile::Calibration> cals = tactile::live::load_calibrations(opt.viewer);
+  const tactile::recording::SourceOptions so = tactile::live::viewer_sources(opt.viewer);
   tactile::util::install_stop_handlers();
   zmq::context_t ctx;
   tactile::recording::Sources sources(ctx, so);
-  std::vector<std::string> eps;
-  for (std::size_t i = 0; i < sources.size(); ++i)
-    eps.push_back(sources.endpoint(i));
 
   const char* term = std::getenv("TERM");
   const bool tty = isatty(STDOUT_FILENO) != 0 && term != nullptr && std::string(term) != "dumb";
   const bool screen = opt.screen || (tty && !opt.plain);
   const bool color = screen && !opt.no_color && std::getenv("NO_COLOR") == nullptr;
 
-  tactile::control::Config cc;
-  cc.f1_n = opt.f1;
-  cc.f2_n = opt.f2;
-  cc.dr_mm = opt.dr;
-  tactile::live::LiveModel model({cc, 8}, eps);
+  tactile::live::LiveModel model({tactile::live::flag_thresholds(opt.viewer), 8},
+                                 tactile::live::endpoints_of(sources));
   tactile::live::RenderOptions ro;
   ro.color = color;
-  ro.f2_n = opt.f2;
+  ro.f2_n = opt.viewer.f2_n;
 
   const std::int64_t start = tactile::util::monotonic_ns();
   const std::int64_t end =
@@ -186,19 +160,7 @@ int main(int argc, char** argv) {
       "the dome (contact, force, slip), the flags, hand_node's phase and latest events, and "
       "message rates. Plain ANSI escape codes (works over SSH with TERM=xterm); one line per "
       "fingertip every --interval when standard output is not a terminal."};
-  app.add_option("endpoints", opt.endpoints,
-                 "publishers: sensor_node (frames, stats) and hand_node's events endpoint");
-  app.add_option("--curve", opt.curve,
-                 "ENDPOINT=SERVER.pub: subscribe with CURVE (repeatable; docs/security.md)")
-      ->allow_extra_args(false);
-  app.add_option("--client-key", opt.client_key, "this program's CURVE key pair (.key)");
-  app.add_option("--calibration", opt.calibrations,
-                 "calibration files: draw the elements where their disks are (default: rings of "
-                 "1, 8, 16, 16)")
-      ->allow_extra_args(false);
-  app.add_option("--f1", opt.f1, "F1 [N] for TOUCH")->capture_default_str();
-  app.add_option("--f2", opt.f2, "F2 [N] for OVER and the force digits")->capture_default_str();
-  app.add_option("--dr", opt.dr, "dr [mm] for SLIP")->capture_default_str();
+  tactile::live::add_viewer_options(app, opt.viewer, "F2 [N] for OVER and the force digits");
   app.add_option("--refresh", opt.refresh_s, "seconds between screen redraws")
       ->capture_default_str();
   app.add_option("--interval", opt.interval_s, "seconds between lines in line mode")
@@ -213,8 +175,7 @@ int main(int argc, char** argv) {
   app.add_flag("--no-color", opt.no_color, "no colours (also when NO_COLOR is set)");
   tactile::cli::add_log_level(app, opt.log_level);
   return tactile::cli::run(app, argc, argv, [&] {
-    if (opt.endpoints.empty() && opt.curve.empty())
-      throw tactile::cli::UsageError("give at least one endpoint to subscribe to");
+    tactile::live::require_endpoints(opt.viewer);
     return run(opt);
   });
 }

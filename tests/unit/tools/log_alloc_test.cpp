@@ -1,10 +1,12 @@
-// The per-message paths of tactile_record and tactile_live allocate nothing once their buffers
-// have grown (docs/architecture.md, rule 4).
+// The per-message paths of tactile_record, tactile_live and tactile_web allocate nothing once
+// their buffers have grown (docs/architecture.md, rule 4).
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
 #include "dashboard.hpp"
 #include "process.hpp"
+#include "server.hpp"
+#include "snapshot.hpp"
 #include "tactile/recording/log_writer.hpp"
 #include "tactile/wire/envelope.hpp"
 
@@ -81,6 +83,64 @@ TEST(LiveModelAlloc, FramesAllocateNothingInSteadyState) {
   }
   EXPECT_EQ(allocations, 0U);
   EXPECT_EQ(m.state().fingertips.at(0).sequence, 59U);
+}
+
+// tactile_web: each frame into the model, the update written and handed to the slot, and a
+// viewer's connection taking it, once the buffers have their room.
+TEST(WebUpdateAlloc, FramesUpdatesAndAViewerAllocateNothingInSteadyState) {
+  LiveModel m({});
+  web::SnapshotWriter writer({}, control::Config{});
+  web::UpdateSlot slot;
+  v1::Envelope env;
+  std::vector<std::string> frames;
+  for (std::uint64_t k = 0; k < 200; ++k) {
+    for (const char* id : {"left", "right"}) {
+      auto* f = env.mutable_tactile_frame();
+      f->Clear();
+      f->set_sensor_id(id);
+      f->set_status(v1::FRAME_STATUS_COMPLETE);
+      f->set_sequence(k);
+      for (std::uint32_t e = 0; e < 41; ++e) {
+        auto* r = f->add_elements();
+        r->set_id(e);
+        r->set_contact((e + k) % 3 == 0);
+        r->set_fz_n(0.1 * e + 0.001 * static_cast<double>(k));
+        r->set_fx_n(-0.01 * e);
+        r->set_fy_n(0.003 * static_cast<double>(k));
+        r->set_has_displacement(true);
+        r->set_dy_mm(0.001 * e);
+      }
+      std::string buf;
+      wire::encode(env, buf);
+      frames.push_back(std::move(buf));
+    }
+  }
+  std::string update;
+  std::string viewer;
+  std::uint64_t seen = 0;
+  web::UpdateCounters counters;
+  auto step = [&](std::size_t k) {
+    for (std::size_t side = 0; side < 2; ++side) {
+      m.add(wire::frame_topic(side == 0 ? "left" : "right"), wire::bytes_of(frames[2 * k + side]),
+            static_cast<std::int64_t>(k) * 10'000'000);
+    }
+    m.tick(static_cast<std::int64_t>(k) * 10'000'000, 1'763'700'000'000'000'000);
+    ++counters.update;
+    writer.write(m.state(), counters, update);
+    slot.publish(update);
+    (void)slot.wait_newer(seen, viewer, std::chrono::milliseconds(0));
+  };
+  for (std::size_t k = 0; k < 20; ++k)
+    step(k);
+  std::size_t allocations = 0;
+  {
+    testing::AllocationScope scope;
+    for (std::size_t k = 20; k < 200; ++k)
+      step(k);
+    allocations = scope.count();
+  }
+  EXPECT_EQ(allocations, 0U);
+  EXPECT_NE(viewer.find(R"("id":"right","sequence":199,)"), std::string::npos) << viewer;
 }
 
 }  // namespace
