@@ -309,19 +309,32 @@ class ArmServer:
         self.commands = self.garbage = self.strangers = self.invalid_commands = 0
         self.deadman_trips = self.states_sent = self.heartbeats_sent = 0
         self.refused_clients = 0
+        # The key files first: a bad one leaves no socket behind (an open socket would keep the
+        # caller's context from terminating).
+        keys = None
+        if server_key is not None:
+            keys = (
+                _read_key(server_key, False),
+                _read_key(server_key, True),
+                [_read_key(k, False) for k in client_keys],
+            )
+        elif list(client_keys):
+            raise ValueError("client keys need the server's key")
         self._ctx = context or zmq.Context.instance()
         self._auth = None
         self.socket = self._ctx.socket(zmq.ROUTER)
-        self.socket.setsockopt(zmq.LINGER, 0)
-        self.socket.setsockopt(zmq.MAXMSGSIZE, 1 << 20)
-        if server_key is not None:
-            self._secure(server_key, [_read_key(k, False) for k in client_keys])
-        elif list(client_keys):
-            raise ValueError("client keys need the server's key")
-        self.socket.bind(endpoint)
+        try:
+            self.socket.setsockopt(zmq.LINGER, 0)
+            self.socket.setsockopt(zmq.MAXMSGSIZE, 1 << 20)
+            if keys is not None:
+                self._secure(*keys)
+            self.socket.bind(endpoint)
+        except Exception:
+            self.close()
+            raise
         self.endpoint = self.socket.getsockopt_string(zmq.LAST_ENDPOINT)
 
-    def _secure(self, server_key: str, allowed: List[bytes]) -> None:
+    def _secure(self, public: bytes, secret: bytes, allowed: List[bytes]) -> None:
         from zmq.auth.thread import ThreadAuthenticator
 
         server = self
@@ -337,8 +350,8 @@ class ArmServer:
         self._auth.start()
         self._auth.configure_curve_callback("*", credentials_provider=Allowed())
         self.socket.curve_server = True
-        self.socket.curve_publickey = _read_key(server_key, False)
-        self.socket.curve_secretkey = _read_key(server_key, True)
+        self.socket.curve_publickey = public
+        self.socket.curve_secretkey = secret
 
     def close(self) -> None:
         self.socket.close(0)

@@ -1,5 +1,7 @@
 """A ZeroMQ subscriber of the system's PUB streams."""
 
+import os
+import stat
 import time
 from typing import Iterable, Iterator, List, Optional
 
@@ -12,23 +14,27 @@ DEFAULT_TOPICS = ("frame/", "event")
 
 
 def _read_key(path: str, secret: bool) -> bytes:
-    """The Z85 key of a tactile_keygen file: NAME.pub holds the public key; NAME.key holds
-    'public' and 'secret' lines (docs/security.md)."""
+    """The Z85 key of a tactile_keygen file: NAME.pub holds the 'public:' line; NAME.key holds
+    'public:' and 'secret:' lines (docs/security.md). As the C++ programs: a secret key file
+    that anyone but its owner may read or write is refused, and no message quotes a key."""
+    if secret:
+        mode = os.stat(path).st_mode
+        if mode & 0o077:
+            raise ValueError(
+                f"{path}: a secret key file must be readable by its owner only "
+                f"(mode {stat.S_IMODE(mode):04o}); run: chmod 600 {path}")
     with open(path, "r", encoding="ascii") as f:
         text = f.read()
     keys = {}
     for line in text.splitlines():
-        line = line.strip()
-        if not line or line.startswith("#"):
+        if not line or line.startswith("#") or ":" not in line:
             continue
-        if ":" in line:
-            name, value = line.split(":", 1)
-            keys[name.strip()] = value.strip()
-        elif len(line) == 40:
-            keys.setdefault("public", line)
+        name, value = line.split(":", 1)
+        keys[name.strip()] = value.strip()
     key = keys.get("secret" if secret else "public")
     if key is None or len(key) != 40:
-        raise ValueError(f"{path}: no {'secret' if secret else 'public'} key")
+        kind = "secret" if secret else "public"
+        raise ValueError(f"{path}: no valid '{kind}:' key (40 Z85 characters)")
     return key.encode("ascii")
 
 

@@ -147,6 +147,7 @@ class ArmServerTest(unittest.TestCase):
             key, pub = os.path.join(d, "arm.key"), os.path.join(d, "hand.pub")
             with open(key, "w") as f:
                 f.write(f"public: {arm_keys[0].decode()}\nsecret: {arm_keys[1].decode()}\n")
+            os.chmod(key, 0o600)
             with open(pub, "w") as f:
                 f.write(f"public: {hand_keys[0].decode()}\n")
             server = self.server(server_key=key, client_keys=[pub])
@@ -158,6 +159,18 @@ class ArmServerTest(unittest.TestCase):
         hand.send(hold_command(2))
         self.assertTrue(self.serve_next(server, 0))
         self.assertEqual(self.arm.written, ["hold"])
+
+    def test_a_secret_key_others_can_read_is_refused_without_quoting_it(self):
+        keys = zmq.curve_keypair()
+        with tempfile.TemporaryDirectory() as d:
+            key = os.path.join(d, "arm.key")
+            with open(key, "w") as f:
+                f.write(f"public: {keys[0].decode()}\nsecret: {keys[1].decode()}\n")
+            os.chmod(key, 0o640)
+            with self.assertRaises(ValueError) as caught:
+                self.server(server_key=key)
+        self.assertIn("chmod 600", str(caught.exception))
+        self.assertNotIn(keys[1].decode(), str(caught.exception))
 
 
 if __name__ == "__main__":
