@@ -20,6 +20,22 @@ void* operator new(std::size_t n) {
 void* operator new[](std::size_t n) {
   return counted_alloc(n);
 }
+// The nothrow forms too (libzmq allocates with them): counted like the others, and freed by the
+// same operator delete, so a sanitizer sees matching pairs.
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
+  if (t_counting) ++t_count;
+  return std::malloc(n == 0 ? 1 : n);
+}
+void* operator new[](std::size_t n, const std::nothrow_t&) noexcept {
+  if (t_counting) ++t_count;
+  return std::malloc(n == 0 ? 1 : n);
+}
+void operator delete(void* p, const std::nothrow_t&) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, const std::nothrow_t&) noexcept {
+  std::free(p);
+}
 void operator delete(void* p) noexcept {
   std::free(p);
 }
