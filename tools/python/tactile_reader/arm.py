@@ -16,6 +16,7 @@ follows every command exactly), as ``arm_bridge`` does. Time is an argument ever
 CLOCK_REALTIME, ``time.time_ns()``).
 """
 
+import abc
 import argparse
 import math
 import signal
@@ -59,18 +60,21 @@ class ArmStateData:
     invalid_command: bool = False
 
 
-class ArmBackend:
-    """The arm behind the server. Called from the server's thread only."""
+class ArmBackend(abc.ABC):
+    """The arm behind the server. Called from the server's thread only. Abstract: a backend
+    that leaves out one of the three cannot be made."""
 
+    @abc.abstractmethod
     def read(self, now_ns: int) -> ArmStateData:
-        raise NotImplementedError
+        """The arm's state at ``now_ns``."""
 
+    @abc.abstractmethod
     def write(self, command, now_ns: int) -> bool:
         """Follow a checked ``tactile_pb2.ArmCommand`` from ``now_ns`` on; False refuses it."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def hold(self, now_ns: int) -> None:
-        raise NotImplementedError
+        """Stop the wrist and the fingers now, keeping the grip."""
 
 
 class ArmPeer:
