@@ -6,10 +6,12 @@
 #include <cmath>
 #include <ctime>
 #include <numbers>
+#include <optional>
 #include <string_view>
 #include <utility>
 
 #include "tactile/control/types.hpp"
+#include "tactile/wire/arm.hpp"
 #include "tactile/wire/envelope.hpp"
 
 namespace tactile::live {
@@ -22,11 +24,8 @@ std::string strip(const std::string& name, std::string_view prefix) {
 }
 
 bool twist_phase_named(const std::string& name) {
-  for (int p = 0; p <= static_cast<int>(control::Phase::kAborted); ++p) {
-    const auto phase = static_cast<control::Phase>(p);
-    if (name == control::to_string(phase)) return control::is_twist_phase(phase);
-  }
-  return false;
+  const std::optional<control::Phase> phase = wire::phase_from_string(name);
+  return phase && control::is_twist_phase(*phase);
 }
 
 std::string clock_text(std::int64_t ns, bool millis) {

@@ -4,21 +4,20 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "tactile/control/types.hpp"
 #include "tactile/plot/figure.hpp"
 #include "tactile/plot/task_figures.hpp"
+#include "tactile/wire/arm.hpp"
 #include "tactile/wire/envelope.hpp"
 
 namespace tactile::plots {
 namespace {
 
 bool twist_phase_named(const std::string& name) {
-  for (int p = 0; p <= static_cast<int>(control::Phase::kAborted); ++p) {
-    const auto phase = static_cast<control::Phase>(p);
-    if (name == control::to_string(phase)) return control::is_twist_phase(phase);
-  }
-  return false;
+  const std::optional<control::Phase> phase = wire::phase_from_string(name);
+  return phase && control::is_twist_phase(*phase);
 }
 
 std::string event_name(v1::EventKind k) {

@@ -7,20 +7,6 @@
 namespace tactile::arm {
 namespace {
 
-// Each fingertip frame's axes in the wrist frame (docs/protocol.md, "Frames of reference"):
-// fingertip 0 sits at -x and squeezes toward +x, fingertip 1 the other way; y_f points down.
-struct Axes {
-  Vec3 x, y, z;
-};
-constexpr std::array<Axes, control::kFingertips> kFingertipAxes{{
-    {{0, -1, 0}, {0, 0, -1}, {1, 0, 0}},
-    {{0, 1, 0}, {0, 0, -1}, {-1, 0, 0}},
-}};
-
-Vec3 in_wrist(const Axes& a, const Vec3& v_f) {
-  return v_f.x * a.x + v_f.y * a.y + v_f.z * a.z;
-}
-
 // Moves `from` toward `to` by at most `step`; true once there.
 bool approach(double& from, double to, double step) {
   const double left = to - from;
@@ -73,10 +59,10 @@ void KinematicArm::advance_to(std::int64_t now_ns) {
       // The last step of an open ends exactly at its distance.
       const double travel = std::min(open_left_m_[i], -v_f.z * dt);
       open_left_m_[i] -= travel;
-      p = p - travel * kFingertipAxes[i].z;
+      p = p - travel * kFingertipAxesInWrist[i].z;
       if (open_left_m_[i] <= 0) finger_velocity_f_[i] = v_f = {};
     } else {
-      p = p + dt * in_wrist(kFingertipAxes[i], v_f);
+      p = p + dt * in_wrist(kFingertipAxesInWrist[i], v_f);
     }
     // Within the stroke along the closing axis: at an end the finger stops (LIMIT).
     const double side = i == 0 ? -1.0 : 1.0;

@@ -14,15 +14,6 @@ Vec3 cross(Vec3 a, Vec3 b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 
-// Wrist-frame axes of each fingertip frame (docs/rig.md, "Frames").
-struct FingertipAxes {
-  Vec3 x, y, z;
-};
-constexpr std::array<FingertipAxes, kFingertips> kAxesInWrist{{
-    {{0, -1, 0}, {0, 0, -1}, {1, 0, 0}},  // left: squeezes toward +x_w
-    {{0, 1, 0}, {0, 0, -1}, {-1, 0, 0}},  // right: squeezes toward -x_w
-}};
-
 Vec3 rotate_yaw(Vec3 v, double yaw) {
   const double c = std::cos(yaw);
   const double s = std::sin(yaw);
@@ -236,8 +227,8 @@ void World::update_fingers(double dt) noexcept {
     Vec3 target = t.commanded_velocity_f;
     if (opening_ && open_left_m_[i] <= 0) target = {};
     t.velocity_f = t.velocity_f + clamp_norm(target - t.velocity_f, a * dt);
-    const FingertipAxes& ax = kAxesInWrist[i];
-    const Vec3 v_w = t.velocity_f.x * ax.x + t.velocity_f.y * ax.y + t.velocity_f.z * ax.z;
+    const FingertipAxes& ax = kFingertipAxesInWrist[i];
+    const Vec3 v_w = in_wrist(ax, t.velocity_f);
     t.offset_w = t.offset_w + dt * v_w;
     if (opening_) open_left_m_[i] += dt * t.velocity_f.z;  // z_f velocity is negative
     // The fingertips cannot cross the grasp centre nor open beyond their stroke.
@@ -254,7 +245,7 @@ void World::place_fingertips() noexcept {
   const Vec3 wrist = wrist_actual();
   for (std::size_t i = 0; i < kFingertips; ++i) {
     Fingertip& t = tips_[i];
-    const FingertipAxes& ax = kAxesInWrist[i];
+    const FingertipAxes& ax = kFingertipAxesInWrist[i];
     t.x_f = rotate_yaw(ax.x, arm_.yaw_rad);
     t.y_f = rotate_yaw(ax.y, arm_.yaw_rad);
     t.z_f = rotate_yaw(ax.z, arm_.yaw_rad);
@@ -289,9 +280,8 @@ World::BaseMotion World::base_motion(double dt) const noexcept {
                               std::cos(2.0 * kPi * p_.arm.vibration_hz * (t_ + dt))};
   for (std::size_t i = 0; i < kFingertips; ++i) {
     const Fingertip& t = tips_[i];
-    const FingertipAxes& ax = kAxesInWrist[i];
-    b.finger_velocity[i] = rotate_yaw(
-        t.velocity_f.x * ax.x + t.velocity_f.y * ax.y + t.velocity_f.z * ax.z, arm_.yaw_rad);
+    const FingertipAxes& ax = kFingertipAxesInWrist[i];
+    b.finger_velocity[i] = rotate_yaw(in_wrist(ax, t.velocity_f), arm_.yaw_rad);
   }
   return b;
 }
