@@ -53,6 +53,12 @@ int run(int argc, char** argv) {
   app.add_option("--ready-file", ready_path,
                  "write this file once every camera's frames are measured and published, and "
                  "remove it on exit (a health check, docker/compose.yaml)");
+  std::string roi;
+  app.add_option("--roi", roi,
+                 "every camera's region of interest: auto (the rows and columns that hold the "
+                 "elements; the default) or full (whole frames); overrides the configuration's "
+                 "roi")
+      ->check(CLI::IsMember({"auto", "full"}));
   tactile::cli::add_log_level(app, log_level);
   return tactile::cli::run(app, argc, argv, [&] {
     tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
@@ -82,6 +88,12 @@ int run(int argc, char** argv) {
       if (fps > 0) c.camera.frame_rate_hz = fps;
       if (c.camera.camera.empty()) throw std::invalid_argument("no camera given (--camera)");
       tactile::sensor::finish_camera_config(c);
+    }
+    if (!roi.empty()) {
+      for (CameraConfig& c : cfg.cameras) {
+        c.roi_auto = roi == "auto";
+        tactile::sensor::finish_camera_config(c);
+      }
     }
     if (!publish.empty()) cfg.publish = publish;
     if (raw_frames) cfg.raw_frames = true;

@@ -200,6 +200,13 @@ void Pipeline::publish_stats() {
   s.set_publish_us_p50(p50);
   s.set_publish_us_max(pmax);
   s.set_camera_restarts(counters_.camera_restarts);
+  if (region_.width > 0) {
+    v1::ImageRegion& r = *s.mutable_region();
+    r.set_x(static_cast<std::uint32_t>(region_.x));
+    r.set_y(static_cast<std::uint32_t>(region_.y));
+    r.set_width(static_cast<std::uint32_t>(region_.width));
+    r.set_height(static_cast<std::uint32_t>(region_.height));
+  }
   wire::encode(stats_env_, bytes_);
   pub_.send(stats_topic_, wire::bytes_of(bytes_));
   publish_reference();  // again now and then: a recorder that joins late still gets it
@@ -249,6 +256,7 @@ void Pipeline::run(const std::atomic<bool>& stop) noexcept {
         publish(frame, to_wire(frame.status), 0);
         continue;
       }
+      region_ = {frame.image.origin_x, frame.image.origin_y, frame.image.width, frame.image.height};
       if (capturing_reference_) {
         const ReferenceResult r = extractor_.add_reference_frame(frame.image);
         if (r.status == ReferenceStatus::kComplete) {

@@ -121,6 +121,7 @@ class Pipeline {
   IntervalTimes publish_times_;
   std::int64_t last_stats_ns_ = 0;
   PipelineCounters counters_;
+  Region region_;  // the last whole frame's part of the sensor image (SensorStats.region)
   std::string fatal_;
   std::thread saver_;  // the reference being written, if any
 };

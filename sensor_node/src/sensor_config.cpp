@@ -10,6 +10,9 @@ SensorConfig default_sensor_config() {
   SensorConfig cfg;
   // Slip is computed only across consecutive whole frames (a lost frame restarts it).
   cfg.measurement.max_gap_frames = 1;
+  // A camera's region of interest (roi: auto) delivers the part of the image that holds every
+  // element's disk: measured exactly as the whole frame.
+  cfg.measurement.accept_regions = true;
   return cfg;
 }
 
@@ -17,6 +20,7 @@ void finish_camera_config(CameraConfig& c) {
   c.camera.width = c.calibration.width;
   c.camera.height = c.calibration.height;
   c.camera.pixel_format = c.calibration.bit_depth == 8 ? PixelFormat::kMono8 : PixelFormat::kMono16;
+  c.camera.region = c.roi_auto ? region_of_interest(c.calibration) : Region{};
   c.camera.validate();
 }
 
@@ -82,7 +86,8 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
     const config::Node c = cams.at(i);
     c.refuse_unknown_keys({"sensor_id", "camera", "calibration", "reference", "reference_cache",
                            "fps", "packet_size", "socket_buffer_bytes", "buffers", "interface",
-                           "packet_resend", "frame_timeout_s", "retry_initial_s", "retry_max_s"});
+                           "packet_resend", "roi", "frame_timeout_s", "retry_initial_s",
+                           "retry_max_s"});
     CameraConfig cc;
     cc.sensor_id = c["sensor_id"].as_string();
     for (const auto& other : cfg.cameras) {
@@ -109,6 +114,11 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
     cc.camera.buffer_count = c.get("buffers", cc.camera.buffer_count);
     cc.camera.interface_address = c.get("interface", cc.camera.interface_address);
     cc.camera.packet_resend = c.get("packet_resend", cc.camera.packet_resend);
+    if (auto roi = c.find("roi")) {
+      const std::string v = roi->as_string();
+      if (v != "auto" && v != "full") roi->fail("must be auto or full, is " + roi->text());
+      cc.roi_auto = v == "auto";
+    }
     cc.frame_timeout_s = positive(c, "frame_timeout_s", cc.frame_timeout_s);
     cc.retry_initial_s = positive(c, "retry_initial_s", cc.retry_initial_s);
     cc.retry_max_s = positive(c, "retry_max_s", cc.retry_max_s);

@@ -22,8 +22,12 @@ struct CameraConfig {
   camera::AravisCameraOptions camera;     // width, height and pixel format from the calibration
   std::filesystem::path reference;        // a no-load frame to use instead of capturing one
   std::filesystem::path reference_cache;  // a captured reference is saved here and reused
-  double frame_timeout_s = 0.5;           // no frame for this long: the camera stopped; reopen it
-  double retry_initial_s = 0.2;           // first wait before reopening, doubled up to retry_max_s
+  // The camera's region of interest: true (`roi: auto`, the default) receives only the rows and
+  // columns that hold the calibration's disks, grown to the camera's increments; false
+  // (`roi: full`) whole frames.
+  bool roi_auto = true;
+  double frame_timeout_s = 0.5;  // no frame for this long: the camera stopped; reopen it
+  double retry_initial_s = 0.2;  // first wait before reopening, doubled up to retry_max_s
   double retry_max_s = 5.0;
 };
 
@@ -52,7 +56,8 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
                                 std::vector<std::string>* warnings,
                                 const std::filesystem::path& state_dir = {});
 
-// Fills the camera's image settings from its calibration and checks them.
+// Fills the camera's image settings (size, pixel format, region of interest) from its
+// calibration and roi_auto, and checks them.
 void finish_camera_config(CameraConfig& c);
 
 }  // namespace tactile::sensor

@@ -173,6 +173,17 @@ void AravisCameraOptions::validate() const {
   }
   if (width < 1 || width > 65535) throw bad("width", width, "must be in 1..65535");
   if (height < 1 || height > 65535) throw bad("height", height, "must be in 1..65535");
+  if (region.width != 0) {
+    const bool inside = region.x >= 0 && region.y >= 0 && region.width >= 1 && region.height >= 1 &&
+                        region.x <= width - region.width && region.y <= height - region.height;
+    if (!inside) {
+      throw bad(
+          "region",
+          fmt::format("x {} y {} width {} height {}", region.x, region.y, region.width,
+                      region.height),
+          fmt::format("must lie inside the {}x{} image (width 0: the whole image)", width, height));
+    }
+  }
   if (!(frame_rate_hz > 0.0 && frame_rate_hz <= 100000.0)) {
     throw bad("frame_rate_hz", frame_rate_hz, "must be in (0, 100000]");
   }
@@ -214,7 +225,9 @@ struct AravisCamera::Impl {
   // Declared first: destroyed last, after every Aravis object below.
   detail::AravisUse aravis;
   AravisCameraOptions options;
-  FrameFormat format;
+  FrameFormat format;  // the region received (set at open)
+  int origin_x = 0;    // where the region's pixel (0, 0) lies on the sensor
+  int origin_y = 0;
   std::int64_t nominal_period_ns = 0;
   std::string last_error;
   std::string description;
@@ -346,9 +359,28 @@ struct AravisCamera::Impl {
     arv_camera_set_pixel_format(cam, detail::to_arv(options.pixel_format), &error);
     detail::throw_if_error(error, fmt::format("{}: cannot set pixel_format = {}", where(),
                                               to_string(options.pixel_format)));
-    arv_camera_set_region(cam, 0, 0, options.width, options.height, &error);
-    detail::throw_if_error(error, fmt::format("{}: cannot set width = {}, height = {}", where(),
-                                              options.width, options.height));
+    // The region: the whole image, or the one asked grown to the camera's increments.
+    Region want{0, 0, options.width, options.height};
+    if (options.region.width != 0) {
+      const auto step = [&](gint (*get)(ArvCamera*, GError**)) {
+        const gint v = get(cam, &error);
+        g_clear_error(&error);  // a camera without the feature's increment: any value
+        return std::max<gint>(v, 1);
+      };
+      RegionRules rules;
+      rules.offset_x_step = step(arv_camera_get_x_offset_increment);
+      rules.offset_y_step = step(arv_camera_get_y_offset_increment);
+      rules.width_step = step(arv_camera_get_width_increment);
+      rules.height_step = step(arv_camera_get_height_increment);
+      want = align_region(options.region, rules, options.width, options.height);
+    }
+    arv_camera_set_region(cam, want.x, want.y, want.width, want.height, &error);
+    detail::throw_if_error(
+        error, fmt::format("{}: cannot set the region x {} y {} width {} height {}{}", where(),
+                           want.x, want.y, want.width, want.height,
+                           want.width == options.width && want.height == options.height
+                               ? ""
+                               : " (a region of interest: receive whole frames instead)"));
     arv_camera_set_frame_rate(cam, options.frame_rate_hz, &error);
     detail::throw_if_error(
         error, fmt::format("{}: cannot set frame_rate_hz = {}", where(), options.frame_rate_hz));
@@ -360,11 +392,18 @@ struct AravisCamera::Impl {
     gint height = 0;
     arv_camera_get_region(cam, &x, &y, &width, &height, &error);
     detail::throw_if_error(error, fmt::format("{}: cannot read the region", where()));
-    if (width != options.width || height != options.height) {
-      throw std::runtime_error(
-          fmt::format("{}: asked width = {}, height = {}; the camera took {}x{}", where(),
-                      options.width, options.height, width, height));
+    if (x != want.x || y != want.y || width != want.width || height != want.height) {
+      throw std::runtime_error(fmt::format(
+          "{}: asked the region x {} y {} width {} height {} of the {}x{} image; the camera "
+          "took x {} y {} width {} height {}{}",
+          where(), want.x, want.y, want.width, want.height, options.width, options.height, x, y,
+          width, height,
+          options.region.width != 0 ? " (a region of interest: receive whole frames instead)"
+                                    : ""));
     }
+    format = {want.width, want.height, options.pixel_format};
+    origin_x = want.x;
+    origin_y = want.y;
     const ArvPixelFormat pixel_format = arv_camera_get_pixel_format(cam, &error);
     detail::throw_if_error(error, fmt::format("{}: cannot read the pixel format", where()));
     if (pixel_format != detail::to_arv(options.pixel_format)) {
@@ -456,13 +495,18 @@ struct AravisCamera::Impl {
 
     const char* serial = arv_camera_get_device_serial_number(camera.get(), &error);
     g_clear_error(&error);
-    description = fmt::format(
-        "{} (serial {}): {} at {} fps, {} buffers{}", where(), serial != nullptr ? serial : "?",
-        to_string(format), options.frame_rate_hz, options.buffer_count,
-        is_gv ? fmt::format(", packets {} B, socket buffer {} B, resend {}",
-                            options.packet_size_bytes, options.socket_buffer_bytes,
-                            options.packet_resend ? "on" : "off")
-              : std::string());
+    description =
+        fmt::format("{} (serial {}): {}{} at {} fps, {} buffers{}", where(),
+                    serial != nullptr ? serial : "?", to_string(format),
+                    format.width == options.width && format.height == options.height
+                        ? std::string()
+                        : fmt::format(" region of interest at ({}, {}) of {}x{}", origin_x,
+                                      origin_y, options.width, options.height),
+                    options.frame_rate_hz, options.buffer_count,
+                    is_gv ? fmt::format(", packets {} B, socket buffer {} B, resend {}",
+                                        options.packet_size_bytes, options.socket_buffer_bytes,
+                                        options.packet_resend ? "on" : "off")
+                          : std::string());
   }
 
   void push_back(ArvBuffer* buffer) noexcept {
@@ -655,9 +699,13 @@ struct AravisCamera::Impl {
     const void* data = arv_buffer_get_data(buffer, &size);
     if (data == nullptr || size != format.payload_bytes()) return FrameStatus::kSizeMismatch;
     frame.image =
-        ImageView{static_cast<const std::uint8_t*>(data), format.width, format.height,
+        ImageView{static_cast<const std::uint8_t*>(data),
+                  format.width,
+                  format.height,
                   static_cast<std::size_t>(format.width) * bytes_per_pixel(format.pixel_format),
-                  format.pixel_format};
+                  format.pixel_format,
+                  origin_x,
+                  origin_y};
     return FrameStatus::kComplete;
   }
 

@@ -170,17 +170,45 @@ struct FakeGvCamera::Impl {
     sent.fill_time_ns = util::realtime_ns();
     const int width = arv_buffer_get_image_width(buffer);
     const int height = arv_buffer_get_image_height(buffer);
+    // The region of interest a receiver set (GenICam OffsetX/OffsetY with Width/Height): the
+    // frame holds that part of the published sensor image.
+    guint32 offset_x = 0;
+    guint32 offset_y = 0;
+    if (self->camera) {
+      ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(self->camera.get());
+      arv_fake_camera_read_register(fake, ARV_FAKE_CAMERA_REGISTER_X_OFFSET, &offset_x);
+      arv_fake_camera_read_register(fake, ARV_FAKE_CAMERA_REGISTER_Y_OFFSET, &offset_y);
+    }
+    sent.origin_x = static_cast<int>(offset_x);
+    sent.origin_y = static_cast<int>(offset_y);
+    sent.width = width;
+    sent.height = height;
     // Size from the geometry: arv_buffer_get_data reports 0 here (Aravis issue 955).
     const std::size_t bytes = detail::frame_bytes(width, height, pixel_format);
+    const std::size_t pixel_bytes = bytes_per_pixel(self->format.pixel_format);
     void* data = const_cast<void*>(arv_buffer_get_data(buffer, nullptr));
-    sent.format_matched = width == self->format.width && height == self->format.height &&
-                          pixel_format == detail::to_arv(self->format.pixel_format) &&
-                          bytes == self->format.payload_bytes();
+    sent.format_matched =
+        width >= 1 && height >= 1 && offset_x <= 65535 && offset_y <= 65535 &&
+        sent.origin_x + width <= self->format.width &&
+        sent.origin_y + height <= self->format.height &&
+        pixel_format == detail::to_arv(self->format.pixel_format) &&
+        bytes == static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * pixel_bytes;
     {
       const std::lock_guard lock(self->front_mutex);
       if (self->front >= 0 && sent.format_matched && data != nullptr) {
         const auto f = static_cast<std::size_t>(self->front);
-        std::memcpy(data, self->images[f].data(), bytes);
+        const std::size_t sensor_row = static_cast<std::size_t>(self->format.width) * pixel_bytes;
+        const std::size_t row = static_cast<std::size_t>(width) * pixel_bytes;
+        const std::uint8_t* from =
+            self->images[f].data() + offset_y * sensor_row + offset_x * pixel_bytes;
+        auto* to = static_cast<std::uint8_t*>(data);
+        if (row == sensor_row) {
+          std::memcpy(to, from, bytes);
+        } else {
+          for (int y = 0; y < height; ++y)
+            std::memcpy(to + static_cast<std::size_t>(y) * row,
+                        from + static_cast<std::size_t>(y) * sensor_row, row);
+        }
         sent.frame_id = self->frame_ids[f];
         sent.timestamp_ns = self->timestamps[f];
       }
@@ -225,6 +253,13 @@ struct FakeGvCamera::Impl {
       throw_port_taken();
     }
     ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(camera.get());  // not owned
+    // The sensor is the published image; a receiver may set a region of interest inside it.
+    arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_WIDTH,
+                                   static_cast<guint32>(options.width));
+    arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT,
+                                   static_cast<guint32>(options.height));
+    arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_X_OFFSET, 0);
+    arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_Y_OFFSET, 0);
     arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH,
                                    static_cast<guint32>(options.width));
     arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT,

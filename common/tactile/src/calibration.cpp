@@ -93,12 +93,28 @@ std::pair<int, int> aligned_cover(int lo, int hi, int n, int offset_step, int si
 
 }  // namespace
 
-Region region_of_interest(const Calibration& cal, RegionRules rules) {
-  validate(cal);
+Region align_region(const Region& needed, const RegionRules& rules, int image_width,
+                    int image_height) {
   if (rules.offset_x_step < 1 || rules.offset_y_step < 1 || rules.width_step < 1 ||
       rules.height_step < 1) {
-    throw std::invalid_argument("region_of_interest: every step must be at least 1");
+    throw std::invalid_argument("align_region: every step must be at least 1");
   }
+  if (image_width < 1 || image_height < 1 || needed.width < 1 || needed.height < 1 ||
+      needed.x < 0 || needed.y < 0 || needed.x + needed.width > image_width ||
+      needed.y + needed.height > image_height) {
+    throw std::invalid_argument("align_region: the region must be non-empty and inside the image");
+  }
+  const auto [x, w] = rules.full_width
+                          ? std::pair<int, int>{0, image_width}
+                          : aligned_cover(needed.x, needed.x + needed.width, image_width,
+                                          rules.offset_x_step, rules.width_step);
+  const auto [y, h] = aligned_cover(needed.y, needed.y + needed.height, image_height,
+                                    rules.offset_y_step, rules.height_step);
+  return {x, y, w, h};
+}
+
+Region region_of_interest(const Calibration& cal, RegionRules rules) {
+  validate(cal);
   int x_lo = cal.width;
   int x_hi = 0;
   int y_lo = cal.height;
@@ -111,11 +127,9 @@ Region region_of_interest(const Calibration& cal, RegionRules rules) {
       y_hi = std::max(y_hi, y + 1);
     });
   }
-  const auto [x, w] = rules.full_width ? std::pair<int, int>{0, cal.width}
-                                       : aligned_cover(x_lo, x_hi, cal.width, rules.offset_x_step,
-                                                       rules.width_step);
-  const auto [y, h] = aligned_cover(y_lo, y_hi, cal.height, rules.offset_y_step, rules.height_step);
-  return {x, y, w, h};
+  if (x_hi <= x_lo || y_hi <= y_lo)
+    return align_region({0, 0, cal.width, cal.height}, rules, cal.width, cal.height);
+  return align_region({x_lo, y_lo, x_hi - x_lo, y_hi - y_lo}, rules, cal.width, cal.height);
 }
 
 void validate(const Calibration& cal) {

@@ -97,6 +97,46 @@ TEST_P(AravisFakeProcess, AravisCameraReceivesWholeFramesOfTheRightSize) {
   EXPECT_FALSE(fake.running());
 }
 
+// Aravis's own fake camera (another implementation of GenICam's OffsetX/OffsetY/Width/Height)
+// takes the region AravisCamera asks for and sends frames of that size.
+TEST(AravisFakeProcessRegion, TakesTheRegionOfInterestAndSendsFramesOfItsSize) {
+  ChildProcess fake({"arv-fake-gv-camera-0.8", "-i", "127.0.0.2", "-s", "PROC2"});
+  wait_for_camera("127.0.0.2", fake);
+  {
+    AravisCameraOptions o;
+    o.camera = "127.0.0.2";
+    o.width = 640;
+    o.height = 480;
+    o.region = {101, 87, 333, 219};
+    o.frame_rate_hz = 50.0;
+    AravisCamera camera(o);
+    camera.start();
+    EXPECT_EQ(camera.format(), (FrameFormat{333, 219, PixelFormat::kMono8}));
+    int complete = 0;
+    for (int i = 0; i < 10; ++i) {
+      const Frame f = camera.wait_frame(2s);
+      ASSERT_TRUE(f.received) << "no frame within 2 s; process output: " << fake.output();
+      if (f.status != FrameStatus::kComplete) continue;
+      ++complete;
+      ASSERT_EQ(f.image.width, 333);
+      ASSERT_EQ(f.image.height, 219);
+      EXPECT_EQ(f.image.origin_x, 101);
+      EXPECT_EQ(f.image.origin_y, 87);
+      // Its ramp is drawn in the frame's own coordinates.
+      for (int y = 0; y < 219; y += 7) {
+        for (int x = 0; x < 333; x += 5) {
+          ASSERT_EQ(f.image.at(x, y), aravis_ramp(PixelFormat::kMono8, x, y, f.camera_frame_id))
+              << "pixel (" << x << ", " << y << ") of frame " << f.camera_frame_id;
+        }
+      }
+    }
+    EXPECT_GE(complete, 9);
+    camera.stop();
+  }
+  const int status = fake.stop();
+  EXPECT_TRUE(status == 0 || status == 128 + 15) << "exit status " << status;
+}
+
 INSTANTIATE_TEST_SUITE_P(Mono8AndMono16, AravisFakeProcess,
                          ::testing::Values(PixelFormat::kMono8, PixelFormat::kMono16),
                          [](const auto& p) { return std::string(to_string(p.param)); });

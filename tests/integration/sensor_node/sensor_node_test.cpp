@@ -12,6 +12,7 @@
 #include "process.hpp"
 #include "support/child_process.hpp"
 #include "synthetic.hpp"
+#include "tactile/camera/fake_gv_camera.hpp"
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/util/pgm.hpp"
 #include "tactile/wire/envelope.hpp"
@@ -182,6 +183,99 @@ TEST_F(SensorNodeAgainstAravisFake, RealtimeSectionCoversAravisAndZeroMQThreadsO
   node.signal(SIGTERM);
   const auto r = node.wait(10s);
   EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+// The camera's region of interest (roi: auto, the default) against whole frames (roi: full): the
+// rig's fake GigE Vision camera shows one pressed sensor image; sensor_node receives only the
+// rows and columns that hold the disks and measures every element exactly as from whole frames,
+// and its SensorStats say which part of the sensor it received.
+TEST(SensorNodeRegion, MeasuresAsFromWholeFramesAndSaysWhichPartItReceives) {
+  TempDir dir;
+  testing::SceneOptions o;
+  o.width = 320;
+  o.height = 240;
+  Calibration cal = testing::grid_calibration(o, 5, 3, 50, 14);
+  cal.sensor_id = "left";
+  config::save_calibration(dir / "left.yaml", cal);
+  testing::SceneRenderer scene(o, &cal);
+  util::Random rng(3);
+  Image rest;
+  scene.render({}, rng, rest);
+  util::write_pgm(dir / "rest.pgm", rest.view());
+  std::vector<testing::Spot> spots;
+  for (std::size_t e = 0; e < cal.elements.size(); e += 2)
+    spots.push_back({cal.elements[e].center_px + Vec2{0.37, -0.21}, 90, 2.2});
+  Image pressed;
+  scene.render(spots, rng, pressed);
+
+  camera::FakeGvCameraOptions fo;
+  fo.address = "127.0.0.2";
+  fo.width = o.width;
+  fo.height = o.height;
+  camera::FakeGvCamera cam(fo);
+  ASSERT_TRUE(cam.publish(pressed.view(), 1, 10'000'000));
+
+  struct Seen {
+    v1::TactileFrame frame;
+    v1::ImageRegion region;
+  };
+  const auto run = [&](const std::string& roi) {
+    Seen seen;
+    const std::string endpoint = "ipc://" + (dir / ("frames-" + roi)).string();
+    Process node({TACTILE_SENSOR_NODE_PATH, "--camera", "127.0.0.2", "--calibration",
+                  (dir / "left.yaml").string(), "--reference", (dir / "rest.pgm").string(),
+                  "--publish", endpoint, "--fps", "100", "--roi", roi});
+    zmq::context_t ctx;
+    wire::Subscriber sub(ctx, {endpoint}, {wire::frame_topic("left"), wire::stats_topic("left")});
+    wire::TopicMessage msg;
+    v1::Envelope env;
+    std::size_t whole = 0;
+    bool have_region = false;
+    const auto deadline = std::chrono::steady_clock::now() + 20s;
+    while ((whole < 20 || !have_region) && std::chrono::steady_clock::now() < deadline) {
+      if (!sub.receive(msg, 50ms)) continue;
+      if (wire::decode(msg.payload, env) != wire::DecodeStatus::kOk) continue;
+      if (env.has_tactile_frame() && env.tactile_frame().status() == v1::FRAME_STATUS_COMPLETE) {
+        seen.frame = env.tactile_frame();
+        ++whole;
+      }
+      if (env.has_sensor_stats() && env.sensor_stats().has_region()) {
+        seen.region = env.sensor_stats().region();
+        have_region = true;
+      }
+    }
+    EXPECT_GE(whole, 20U) << roi << ": " << node.err_so_far();
+    EXPECT_TRUE(have_region) << roi << ": " << node.err_so_far();
+    node.signal(SIGTERM);
+    const auto r = node.wait(10s);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    if (roi == "auto") {
+      EXPECT_NE(r.err.find("region of interest at"), std::string::npos) << r.err;
+    }
+    return seen;
+  };
+  const Seen full = run("full");
+  const Seen part = run("auto");
+  EXPECT_EQ(full.region.x(), 0U);
+  EXPECT_EQ(full.region.y(), 0U);
+  EXPECT_EQ(full.region.width(), 320U);
+  EXPECT_EQ(full.region.height(), 240U);
+  const Region want = region_of_interest(cal);
+  EXPECT_EQ(part.region.x(), static_cast<std::uint32_t>(want.x));
+  EXPECT_EQ(part.region.y(), static_cast<std::uint32_t>(want.y));
+  EXPECT_EQ(part.region.width(), static_cast<std::uint32_t>(want.width));
+  EXPECT_EQ(part.region.height(), static_cast<std::uint32_t>(want.height));
+  EXPECT_LT(want.width * want.height, 320 * 240 * 3 / 4) << "the region must be a real saving";
+  ASSERT_EQ(full.frame.elements_size(), static_cast<int>(cal.elements.size()));
+  ASSERT_EQ(part.frame.elements_size(), full.frame.elements_size());
+  std::size_t touching = 0;
+  for (int i = 0; i < full.frame.elements_size(); ++i) {
+    const v1::ElementReading& a = full.frame.elements(i);
+    const v1::ElementReading& b = part.frame.elements(i);
+    EXPECT_EQ(a.SerializeAsString(), b.SerializeAsString()) << "element " << a.id();
+    touching += a.contact() ? 1 : 0;
+  }
+  EXPECT_GE(touching, cal.elements.size() / 2) << "the pressed elements are in contact";
 }
 
 TEST(SensorNode, BadInputIsOneClearLine) {

@@ -241,6 +241,68 @@ INSTANTIATE_TEST_SUITE_P(Mono8AndMono16, GigE,
                          ::testing::Values(PixelFormat::kMono8, PixelFormat::kMono16),
                          [](const auto& p) { return std::string(to_string(p.param)); });
 
+// A region of interest (issue "Honest GigE"): the receiver asks for a part of the sensor, the
+// camera sends exactly that part of the published image, and the frames say where it lies.
+TEST_P(GigE, ARegionOfInterestSendsThatPartOfTheSensorWithItsOrigin) {
+  const PixelFormat format = GetParam();
+  FakeGvCamera fake(fake_options("127.0.0.2", "UT01", 320, 240, format, 100.0));
+  ASSERT_TRUE(fake.is_running());
+  SentLog log(fake);
+  const TimestampCode code;
+  Renderer renderer(fake, 13, code, 4ms);
+
+  AravisCameraOptions o = receiver_options("127.0.0.2", 320, 240, format, 100.0);
+  o.region = {37, 21, 150, 101};  // odd offsets and sizes: the fake's increments are 1
+  AravisCamera camera(o);
+  camera.start();
+  EXPECT_EQ(camera.format(), (FrameFormat{150, 101, format}));
+  EXPECT_NE(camera.describe().find("region of interest at (37, 21) of 320x240"), std::string::npos)
+      << camera.describe();
+  const int count = 20;
+  const ReceiveReport report = receive_and_check(camera, count, 13, code, &log);
+  expect_clean_stream(camera, report, count);
+  camera.stop();
+  const SentFrame sent = fake.last_sent();
+  EXPECT_EQ(sent.origin_x, 37);
+  EXPECT_EQ(sent.origin_y, 21);
+  EXPECT_EQ(sent.width, 150);
+  EXPECT_EQ(sent.height, 101);
+  EXPECT_TRUE(sent.format_matched);
+}
+
+// A frame's view of a region carries its origin, and a region outside the image is refused by
+// name before the network is touched.
+TEST(GigERegion, AFrameCarriesTheRegionsOriginAndABadRegionIsRefused) {
+  FakeGvCamera fake(fake_options("127.0.0.2", "UT01", 320, 240, PixelFormat::kMono8, 100.0));
+  const TimestampCode code;
+  Renderer renderer(fake, 5, code, 4ms);
+  AravisCameraOptions o = receiver_options("127.0.0.2", 320, 240, PixelFormat::kMono8, 100.0);
+  o.region = {0, 200, 320, 40};  // whole rows: the bottom sixth
+  AravisCamera camera(o);
+  camera.start();
+  Frame f;
+  for (int i = 0; i < 5 && f.status != FrameStatus::kComplete; ++i)
+    f = camera.wait_frame(2s);
+  ASSERT_EQ(f.status, FrameStatus::kComplete) << counters_text(camera.counters());
+  EXPECT_EQ(f.image.origin_x, 0);
+  EXPECT_EQ(f.image.origin_y, 200);
+  EXPECT_EQ(f.image.width, 320);
+  EXPECT_EQ(f.image.height, 40);
+  camera.stop();
+
+  o.region = {300, 0, 21, 10};  // one column past the right edge
+  try {
+    AravisCamera bad(o);
+    ADD_FAILURE() << "a region outside the image was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("region = x 300 y 0 width 21 height 10"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("inside the 320x240 image"), std::string::npos)
+        << e.what();
+  }
+}
+
 // A stream's first frame used to meet the kernel's default socket buffer (Aravis applies its
 // own size only when that frame starts): at 640x480 Mono16 it overflowed and came incomplete.
 TEST(GigEStart, TheFirstFrameOfEveryNewStreamComesWhole) {

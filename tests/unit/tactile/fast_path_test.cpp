@@ -289,6 +289,26 @@ TEST(RegionOfInterest, HoldsEveryDiskAndObeysTheSteps) {
   EXPECT_THROW(region_of_interest(cal, rules), std::invalid_argument);
 }
 
+// What a camera applies with its own increments (AravisCamera at open): the smallest aligned
+// region holding the one asked, never outside the image.
+TEST(RegionOfInterest, AlignRegionGrowsToTheCamerasIncrementsInsideTheImage) {
+  RegionRules rules;
+  EXPECT_EQ(align_region({37, 21, 150, 101}, rules, 320, 240), (Region{37, 21, 150, 101}));
+  rules.offset_x_step = 4;
+  rules.offset_y_step = 2;
+  rules.width_step = 16;
+  rules.height_step = 8;
+  // x 36 (multiple of 4) to 187 needs 151 columns: 160; y 20 to 122 needs 102 rows: 104.
+  EXPECT_EQ(align_region({37, 21, 150, 101}, rules, 320, 240), (Region{36, 20, 160, 104}));
+  // At the right edge the start moves left to keep the width a multiple of its step.
+  EXPECT_EQ(align_region({300, 0, 20, 8}, rules, 320, 240), (Region{304 - 16, 0, 32, 8}));
+  rules.full_width = true;
+  EXPECT_EQ(align_region({37, 21, 150, 101}, rules, 320, 240), (Region{0, 20, 320, 104}));
+  EXPECT_THROW(align_region({300, 0, 21, 8}, {}, 320, 240), std::invalid_argument);
+  EXPECT_THROW(align_region({0, 0, 0, 8}, {}, 320, 240), std::invalid_argument);
+  EXPECT_THROW(align_region({-1, 0, 8, 8}, {}, 320, 240), std::invalid_argument);
+}
+
 // A view of the region [r.x, r.x + w) x [r.y, r.y + h) of `full`, as a camera set to that region
 // would deliver it (its own buffer, its own stride).
 Image crop(const Image& full, const Region& r) {

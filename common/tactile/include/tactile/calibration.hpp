@@ -97,4 +97,11 @@ struct RegionRules {
 // Throws CalibrationError for an invalid calibration, std::invalid_argument for steps < 1.
 Region region_of_interest(const Calibration& cal, RegionRules rules = {});
 
+// The smallest region that holds `needed` and obeys `rules` inside an image_width x image_height
+// sensor (the whole side where the steps cannot be met). region_of_interest() is this on the
+// disks' bounding box; a camera applies it with its own steps. Throws std::invalid_argument for
+// steps < 1 or a `needed` that is empty or not inside the image.
+Region align_region(const Region& needed, const RegionRules& rules, int image_width,
+                    int image_height);
+
 }  // namespace tactile

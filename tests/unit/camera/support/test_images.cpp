@@ -33,10 +33,14 @@ std::string compare_to_pattern(const ImageView& view, std::uint64_t k, std::uint
   if (view.data == nullptr) return "no pixels";
   for (int y = 0; y < view.height; ++y) {
     for (int x = 0; x < view.width; ++x) {
-      const std::uint32_t want = pattern_value(view.format, x, y, k, salt);
+      // The pattern of the sensor's pixel: a region of interest's view starts at its origin.
+      const int sx = x + view.origin_x;
+      const int sy = y + view.origin_y;
+      const std::uint32_t want = pattern_value(view.format, sx, sy, k, salt);
       const std::uint32_t got = view.at(x, y);
       if (got != want) {
-        return fmt::format("frame {}: pixel ({}, {}) is {}, expected {}", k, x, y, got, want);
+        return fmt::format("frame {}: pixel ({}, {}) of the sensor is {}, expected {}", k, sx, sy,
+                           got, want);
       }
     }
   }

@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "tactile/calibration.hpp"
 #include "tactile/camera/camera.hpp"
 
 namespace tactile::camera {
@@ -17,9 +18,14 @@ struct AravisCameraOptions {
   // Only used when `camera` is an address.
   std::string interface_address;
 
+  // The sensor's image (the calibration's size).
   int width = 640;
   int height = 480;
   PixelFormat pixel_format = PixelFormat::kMono8;
+  // The part of the width x height image to receive (GenICam OffsetX, OffsetY, Width, Height):
+  // grown at open() to the camera's increments (align_region), and the frames' views carry its
+  // origin. Width 0: the whole image. open() throws when the camera does not take it.
+  Region region{};
   double frame_rate_hz = 100.0;  // AcquisitionFrameRate
 
   // GVSP packet size in bytes, headers included: at most the MTU of the link (65000 suits lo,

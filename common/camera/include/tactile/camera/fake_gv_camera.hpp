@@ -17,9 +17,12 @@ struct FakeGvCameraOptions {
   // 127.0.0.1 is on a stock machine; see docs/camera.md for 127.0.0.2 and 127.0.0.3).
   std::string address = "127.0.0.2";
   std::string serial = "GV01";  // 1 to 15 characters
-  // The camera's power-on format and rate. A receiver may change them over GVCP (AravisCamera
-  // sets its own); a frame whose format differs from format() is sent without the published
-  // image (its content is then undefined) and reported with SentFrame::format_matched false.
+  // The camera's power-on format and rate; width x height is its sensor. A receiver may change
+  // them over GVCP (AravisCamera sets its own) and set a region of interest inside the sensor
+  // (OffsetX, OffsetY, Width, Height), whose part of the published image the camera then sends.
+  // A frame whose pixel format differs from format()'s, or whose region leaves the sensor, is
+  // sent without the published image (its content is then undefined) and reported with
+  // SentFrame::format_matched false.
   int width = 640;
   int height = 480;
   PixelFormat pixel_format = PixelFormat::kMono8;
@@ -41,7 +44,14 @@ struct SentFrame {
   std::uint64_t block_id = 0;
   // CLOCK_REALTIME when the camera copied the image into its buffer, just before sending.
   std::int64_t fill_time_ns = 0;
-  // False when the camera's current format differs from format(): the image was not sent.
+  // The part of the published image the frame holds: the region of interest a receiver set
+  // (OffsetX, OffsetY, Width, Height; the whole image by default).
+  int origin_x = 0;
+  int origin_y = 0;
+  int width = 0;
+  int height = 0;
+  // False when the camera's pixel format differs from format()'s, or its region does not lie
+  // inside format()'s image: the image was not sent.
   bool format_matched = true;
 };
 
