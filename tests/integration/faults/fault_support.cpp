@@ -214,16 +214,22 @@ TruthSource known_images_truth(const KnownImages& images) {
   };
 }
 
-TruthSource aravis_ramp_truth(int width, int height) {
-  auto image = std::make_shared<Image>(width, height, PixelFormat::kMono8);
-  return [image](const v1::TactileFrame& f, std::string& why) -> const Image* {
+TruthSource aravis_ramp_truth(const Calibration& cal) {
+  // sensor_node sets the camera's region of interest (roi: auto; the fake's increments are 1),
+  // and arv-fake-gv-camera draws its ramp in the frame's own coordinates: a sensor pixel (x, y)
+  // of the region holds the ramp at (x - region.x, y - region.y). Outside it nothing is sent
+  // and nothing is measured.
+  const Region region = region_of_interest(cal);
+  auto image = std::make_shared<Image>(cal.width, cal.height, PixelFormat::kMono8);
+  return [image, region](const v1::TactileFrame& f, std::string& why) -> const Image* {
     if (f.camera_frame_id() == 0 || f.camera_frame_id() > 65535) {
       why = fmt::format("block id {} is not a GigE Vision 1.x id", f.camera_frame_id());
       return nullptr;
     }
-    for (int y = 0; y < image->height(); ++y) {
-      for (int x = 0; x < image->width(); ++x) {
-        const auto sum = static_cast<std::uint64_t>(x + y) + f.camera_frame_id();
+    for (int y = region.y; y < region.y + region.height; ++y) {
+      for (int x = region.x; x < region.x + region.width; ++x) {
+        const auto sum =
+            static_cast<std::uint64_t>(x - region.x + y - region.y) + f.camera_frame_id();
         image->set(x, y, static_cast<std::uint32_t>(sum % 255));
       }
     }
@@ -446,8 +452,7 @@ LossRun run_sensor_node_under_loss(const std::string& sensor_node, const LossSet
   if (nft) run.nft = nft->counts();
   run.exit_lines = sensor_node_exit_lines(run.log);
   run.stats = collector.stats("left");
-  const TruthSource truth =
-      arv ? aravis_ramp_truth(cal.width, cal.height) : known_images_truth(images);
+  const TruthSource truth = arv ? aravis_ramp_truth(cal) : known_images_truth(images);
   run.truth = check_against_truth(collector.frames("left"), truth, reference,
                                   parsed.cameras.front().calibration, parsed.measurement);
   return run;

@@ -100,8 +100,9 @@ class Collector {
 using TruthSource = std::function<const Image*(const v1::TactileFrame&, std::string& why)>;
 // KnownImages, by camera timestamp.
 TruthSource known_images_truth(const KnownImages& images);
-// arv-fake-gv-camera-0.8's own Mono8 image: a diagonal ramp (x + y + block id) mod 255.
-TruthSource aravis_ramp_truth(int width, int height);
+// arv-fake-gv-camera-0.8's own Mono8 image: a diagonal ramp (x + y + block id) mod 255 in the
+// frame's coordinates, the frame being the region of interest sensor_node sets for `cal`.
+TruthSource aravis_ramp_truth(const Calibration& cal);
 
 // The published frames of one sensor checked against the truth: the frames the camera sent,
 // measured again here by the measurement core with sensor_node's options and reference, in the
