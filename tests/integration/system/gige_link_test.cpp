@@ -1,0 +1,56 @@
+// scripts/bench-gige-link as a user runs it, as root: two of Aravis's own fake GigE Vision
+// cameras behind one veth pair shaped to 1 Gbit/s by tc tbf, sensor_node in another namespace,
+// whole frames and the region of interest (issue "Honest GigE"). Whole frames of both cameras at
+// 200 fps need 103 % of the link: the shaping holds them under the link's rate; the region needs
+// 49 % and arrives whole.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "process.hpp"
+
+namespace tactile {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::TempDir;
+
+const std::filesystem::path kSource = TACTILE_SOURCE_DIR;
+
+TEST(GigeLink, TheRegionOfInterestCarriesTwoCamerasThatWholeFramesOverload) {
+  ASSERT_EQ(::geteuid(), 0U) << "network namespaces and tc need root (CI runs as root)";
+  TempDir dir;
+  const auto r = testing::run({"bash", (kSource / "scripts/bench-gige-link").string(), "--build",
+                               TACTILE_BUILD_DIR, "--out", (dir / "out").string(), "--topologies",
+                               "shared", "--rois", "full,auto", "--seconds", "3"},
+                              180s);
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("| shared-auto | left | 382x382 at (129, 49) | 1.23 | 49 % |"),
+            std::string::npos)
+      << r.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "gige-link.md"));
+  std::ifstream in(dir / "out" / "gige-link.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  for (const char* cam : {"left", "right"}) {
+    const auto& full = j["runs"]["shared-full"][cam];
+    const auto& part = j["runs"]["shared-auto"][cam];
+    SCOPED_TRACE(cam);
+    EXPECT_EQ(full["region"], nlohmann::json::array({0, 0, 640, 480}));
+    EXPECT_NEAR(full["wire_time_ms"].get<double>(), 2.58, 0.01);
+    EXPECT_GT(full["link_load_needed"].get<double>() * 2, 1.0) << "two whole frames overload it";
+    // The link cannot carry more than its rate: two cameras of whole frames get at most
+    // 1 / (2 x wire time) frames per second each (2 % for the measured window's ends).
+    EXPECT_LE(full["fps"].get<double>(), 1.02 / (2 * full["wire_time_ms"].get<double>() * 1e-3));
+    EXPECT_LT(part["link_load_needed"].get<double>() * 2, 0.55);
+    EXPECT_EQ(part["incomplete"].get<int>(), 0);
+    EXPECT_GT(part["frames"].get<int>(), 100);
+    EXPECT_GT(part["fps"].get<double>(), full["fps"].get<double>());
+    EXPECT_LT(part["camera_to_received_ms"]["p50"].get<double>(),
+              full["camera_to_received_ms"]["p50"].get<double>());
+  }
+}
+
+}  // namespace
+}  // namespace tactile
