@@ -360,8 +360,11 @@ struct AravisCamera::Impl {
     detail::throw_if_error(error, fmt::format("{}: cannot set pixel_format = {}", where(),
                                               to_string(options.pixel_format)));
     // The region: the whole image, or the one asked grown to the camera's increments.
+    const bool asked_region = options.region.width != 0;
+    const char* const instead =
+        asked_region ? " (a region of interest: receive whole frames instead)" : "";
     Region want{0, 0, options.width, options.height};
-    if (options.region.width != 0) {
+    if (asked_region) {
       const auto step = [&](gint (*get)(ArvCamera*, GError**)) {
         const gint v = get(cam, &error);
         g_clear_error(&error);  // a camera without the feature's increment: any value
@@ -377,10 +380,7 @@ struct AravisCamera::Impl {
     arv_camera_set_region(cam, want.x, want.y, want.width, want.height, &error);
     detail::throw_if_error(
         error, fmt::format("{}: cannot set the region x {} y {} width {} height {}{}", where(),
-                           want.x, want.y, want.width, want.height,
-                           want.width == options.width && want.height == options.height
-                               ? ""
-                               : " (a region of interest: receive whole frames instead)"));
+                           want.x, want.y, want.width, want.height, instead));
     arv_camera_set_frame_rate(cam, options.frame_rate_hz, &error);
     detail::throw_if_error(
         error, fmt::format("{}: cannot set frame_rate_hz = {}", where(), options.frame_rate_hz));
@@ -397,9 +397,7 @@ struct AravisCamera::Impl {
           "{}: asked the region x {} y {} width {} height {} of the {}x{} image; the camera "
           "took x {} y {} width {} height {}{}",
           where(), want.x, want.y, want.width, want.height, options.width, options.height, x, y,
-          width, height,
-          options.region.width != 0 ? " (a region of interest: receive whole frames instead)"
-                                    : ""));
+          width, height, instead));
     }
     format = {want.width, want.height, options.pixel_format};
     origin_x = want.x;
