@@ -73,6 +73,10 @@ int run(int argc, char** argv) {
   app.add_option(
       "--cameras", cameras,
       "real time: the two cameras' IPv4 addresses, left,right (default 127.0.0.2,127.0.0.3)");
+  app.add_option("--camera-netns", rt.camera_netns,
+                 "real time: serve the cameras inside this network namespace (a name `ip netns "
+                 "add` made, or a path such as /proc/PID/ns/net): behind a link of their own, "
+                 "which scripts/run-system shapes to line rate; root");
   app.add_option("--arm", rt.arm_endpoint, "real time: the arm controller's endpoint")
       ->capture_default_str();
   app.add_option("--truth", rt.truth_endpoint, "real time: ground-truth PUB endpoint (empty: none)")

@@ -15,7 +15,9 @@
 
 #include <cerrno>
 #include <cstring>
+#include <exception>
 #include <stdexcept>
+#include <thread>
 
 #include "tactile/util/fd.hpp"
 
@@ -121,6 +123,32 @@ void add_loopback_address(std::string_view text) {
 }
 
 }  // namespace
+
+void run_in_network_namespace(const std::string& netns, const std::function<void()>& fn) {
+  const std::string path = netns.find('/') == std::string::npos ? "/run/netns/" + netns : netns;
+  const Fd ns(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  if (ns.get() < 0) {
+    const int error = errno;
+    throw std::runtime_error(
+        fmt::format("cannot open the network namespace {}: {} (make it with `ip netns add {}`)",
+                    path, errno_text(error), netns));
+  }
+  std::exception_ptr failed;
+  std::thread([&] {
+    try {
+      if (::setns(ns.get(), CLONE_NEWNET) != 0) {
+        const int error = errno;
+        throw std::runtime_error(fmt::format("cannot join the network namespace {}: {}{}", path,
+                                             errno_text(error),
+                                             error == EPERM ? " (it needs root)" : ""));
+      }
+      fn();
+    } catch (...) {
+      failed = std::current_exception();
+    }
+  }).join();
+  if (failed) std::rethrow_exception(failed);
+}
 
 void enter_private_network(const std::vector<std::string>& loopback_addresses) {
   for (const auto& address : loopback_addresses)

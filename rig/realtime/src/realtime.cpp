@@ -14,6 +14,7 @@
 
 #include "tactile/arm/arm_server.hpp"
 #include "tactile/camera/fake_gv_camera.hpp"
+#include "tactile/camera/private_network.hpp"
 #include "tactile/control/config.hpp"
 #include "tactile/control/slip_detector.hpp"
 #include "tactile/rig/arm_link.hpp"
@@ -289,22 +290,31 @@ RealtimeRun::RealtimeRun(const Scenario& sc, const RealtimeOptions& opt)
   const auto& ids = kFingertipIds;
   if (!opt.calibration_dir.empty())
     save_calibrations(opt.calibration_dir, result_.run.calibrations);
-  for (std::size_t i = 0; i < kFingertips; ++i) {
-    camera::FakeGvCameraOptions fo;
-    fo.address = opt.camera_addresses[i];
-    fo.serial = opt.camera_serials[i];
-    fo.width = cam_.width;
-    fo.height = cam_.height;
-    fo.pixel_format = cam_.bit_depth == 8 ? PixelFormat::kMono8 : PixelFormat::kMono16;
-    fo.frame_rate_hz = cam_.fps;
-    cameras_.push_back(std::make_unique<camera::FakeGvCamera>(fo));
-    // An image the camera sent with its own block id: the id sensor_node publishes the frame
-    // with. A frame before the first image or in another format carries no image of ours.
-    cameras_.back()->set_sent_observer([queue = &sent_[i]](const camera::SentFrame& s) {
-      if (s.format_matched && s.frame_id != 0) queue->push({s.frame_id, s.block_id});
-    });
-    util::log_info("camera {} ({}) serving on {}", ids[i], fo.serial, fo.address);
-  }
+  const auto serve_cameras = [&] {
+    for (std::size_t i = 0; i < kFingertips; ++i) {
+      camera::FakeGvCameraOptions fo;
+      fo.address = opt.camera_addresses[i];
+      fo.serial = opt.camera_serials[i];
+      fo.width = cam_.width;
+      fo.height = cam_.height;
+      fo.pixel_format = cam_.bit_depth == 8 ? PixelFormat::kMono8 : PixelFormat::kMono16;
+      fo.frame_rate_hz = cam_.fps;
+      cameras_.push_back(std::make_unique<camera::FakeGvCamera>(fo));
+      // An image the camera sent with its own block id: the id sensor_node publishes the frame
+      // with. A frame before the first image or in another format carries no image of ours.
+      cameras_.back()->set_sent_observer([queue = &sent_[i]](const camera::SentFrame& s) {
+        if (s.format_matched && s.frame_id != 0) queue->push({s.frame_id, s.block_id});
+      });
+      util::log_info("camera {} ({}) serving on {}{}", ids[i], fo.serial, fo.address,
+                     opt.camera_netns.empty() ? "" : " in network namespace " + opt.camera_netns);
+    }
+  };
+  // The cameras' sockets (and the Aravis threads that serve them) are made where they are
+  // created: in the camera namespace when one is named.
+  if (opt.camera_netns.empty())
+    serve_cameras();
+  else
+    camera::run_in_network_namespace(opt.camera_netns, serve_cameras);
 
   // Sockets.
   if (!opt.truth_endpoint.empty())

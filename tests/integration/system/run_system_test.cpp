@@ -8,6 +8,7 @@
 #include <regex>
 
 #include "process.hpp"
+#include "tactile/util/files.hpp"
 #include "tactile/wire/envelope.hpp"
 #include "tools_support.hpp"
 
@@ -114,6 +115,44 @@ TEST(RunSystem, EndpointsReachableFromTheHostAndTheRunRecordedWithRawFrames) {
                         std::regex("left: \\d+ frames measured again, \\d+ identical bit for "
                                    "bit, 0 differ")))
       << remeasure.out << remeasure.err;
+}
+
+// The cameras behind one link shaped to 1 Gbit/s at MTU 1500 (docs/system.md, "Camera links"):
+// the rig serves them in a namespace of their own, sensor_node receives their region of interest
+// over the link, and the task completes with every frame whole.
+TEST(RunSystem, CamerasBehindOneLinkShapedToLineRateCompleteTheTask) {
+  TempDir dir;
+  const auto out = dir / "out";
+  Process run({"bash", (kSource / "scripts/run-system").string(), "--build", TACTILE_BUILD_DIR,
+               "--scenario", TACTILE_SYSTEM_SCENARIO, "--out", out.string(), "--host-net", "none",
+               "--camera-link", "shared"});
+  const auto r = run.wait(240s);
+  ASSERT_FALSE(r.timed_out) << r.err;
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("run-system: cameras 10.78.0.1,10.78.0.3 behind 1 link(s) shaped to 1gbit, "
+                       "MTU 1500 (shared)"),
+            std::string::npos)
+      << r.err;
+  // Every GVSP packet went through the link's queue, and none was dropped there.
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(
+      r.err, m, std::regex("camera link 0: Sent (\\d+) bytes (\\d+) pkt \\(dropped (\\d+)")))
+      << r.err;
+  EXPECT_GT(std::stoll(m[2].str()), 10000) << m[0];
+  EXPECT_EQ(m[3].str(), "0") << m[0];
+  // sensor_node opened the cameras at their link addresses with the region of interest and
+  // packets that fit the MTU; the rig scored the frames, whole.
+  const std::string sensor_log = util::read_file(out / "logs/sensor_node.log");
+  for (const char* address : {"10.78.0.1", "10.78.0.3"})
+    EXPECT_NE(sensor_log.find(address), std::string::npos) << address << "\n" << sensor_log;
+  EXPECT_NE(sensor_log.find("region of interest at"), std::string::npos) << sensor_log;
+  EXPECT_NE(sensor_log.find("packets 1500 B"), std::string::npos) << sensor_log;
+  const std::string rig_log = util::read_file(out / "logs/rig.log");
+  ASSERT_TRUE(std::regex_search(
+      rig_log, m, std::regex("scored (\\d+) \\(unmatched \\d+, incomplete (\\d+)\\)")))
+      << rig_log;
+  EXPECT_GT(std::stoll(m[1].str()), 1000) << m[0];
+  EXPECT_EQ(m[2].str(), "0") << m[0];
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "process.hpp"
 #include "support/test_images.hpp"
 #include "tactile/camera/aravis_camera.hpp"
 #include "tactile/camera/fake_gv_camera.hpp"
@@ -406,6 +407,52 @@ TEST(GigEErrors, AFakeCameraOnAnUnassignedAddressSaysHowToFixIt) {
     EXPECT_NE(what.find("127.0.0.9 is not assigned"), std::string::npos) << what;
     EXPECT_NE(what.find("ip addr add 127.0.0.9/8 dev lo"), std::string::npos) << what;
     EXPECT_NE(what.find("unshare -rn"), std::string::npos) << what;
+  }
+}
+
+// How the rig puts its cameras behind a link of their own (rig --camera-netns): a camera created
+// on a thread that joined another network namespace serves there, and only there.
+TEST(GigENamespace, ACameraCreatedInAnotherNamespaceServesThereAndOnlyThere) {
+  ASSERT_FALSE(ipv4_address_assigned("127.0.0.9"));
+  // A namespace held by a process of its own, with 127.0.0.9 on its lo.
+  tactile::testing::Process holder(
+      {"unshare", "--net", "--", "sh", "-c",
+       "ip link set lo up && ip addr add 127.0.0.9/8 dev lo && echo up && exec sleep 60"});
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (holder.out_so_far().find("up") == std::string::npos) {
+    ASSERT_TRUE(holder.running()) << holder.err_so_far();
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "the namespace did not come up";
+    std::this_thread::sleep_for(10ms);
+  }
+  const std::string netns = "/proc/" + std::to_string(holder.pid()) + "/ns/net";
+
+  std::unique_ptr<FakeGvCamera> fake;
+  bool assigned_there = false;
+  run_in_network_namespace(netns, [&] {
+    assigned_there = ipv4_address_assigned("127.0.0.9");
+    fake = std::make_unique<FakeGvCamera>(
+        fake_options("127.0.0.9", "NETNS", 64, 48, PixelFormat::kMono8, 10.0));
+  });
+  EXPECT_TRUE(assigned_there);
+  ASSERT_TRUE(fake && fake->is_running());
+  // The caller's thread stayed where it was: the address is not here, the camera not reachable.
+  EXPECT_FALSE(ipv4_address_assigned("127.0.0.9"));
+  EXPECT_FALSE(gvcp_device_answers("127.0.0.9", 200ms));
+  bool answers_there = false;
+  run_in_network_namespace(netns, [&] { answers_there = gvcp_device_answers("127.0.0.9", 1s); });
+  EXPECT_TRUE(answers_there);
+  fake.reset();
+
+  // What fn throws comes back; a namespace that is not there is named.
+  EXPECT_THROW(run_in_network_namespace(netns, [] { throw std::logic_error("from inside"); }),
+               std::logic_error);
+  try {
+    run_in_network_namespace("tactile-no-such-netns", [] {});
+    FAIL() << "joined a namespace that does not exist";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("/run/netns/tactile-no-such-netns"), std::string::npos) << what;
+    EXPECT_NE(what.find("ip netns add tactile-no-such-netns"), std::string::npos) << what;
   }
 }
 

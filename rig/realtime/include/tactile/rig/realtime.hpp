@@ -23,6 +23,10 @@ struct RealtimeOptions {
   // One fake GigE Vision camera per fingertip (left, right): each needs its own address.
   std::array<std::string, kFingertips> camera_addresses{"127.0.0.2", "127.0.0.3"};
   std::array<std::string, kFingertips> camera_serials{"TACTILE-L", "TACTILE-R"};
+  // Serve the cameras inside this network namespace (camera::run_in_network_namespace: a name
+  // under /run/netns or a path), the rest of the rig staying where it runs: the cameras behind
+  // a link of their own. Empty: where the rig runs.
+  std::string camera_netns;
   std::string arm_endpoint = "tcp://*:5556";    // the arm controller's ROUTER
   std::string truth_endpoint = "tcp://*:5557";  // ground truth PUB; empty: none
   // What the rig watches to score the run: sensor_node's frames and hand_node's events.
