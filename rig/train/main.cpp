@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstdio>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -81,6 +82,7 @@ int main(int argc, char** argv) {
   unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
   std::string out = "common/control/src/slip_model.inc";
   double max_time_s = 0;
+  std::optional<double> decision_level;
   rig::train::BoostParams params;
   params.trees = 48;
   params.depth = 5;
@@ -113,6 +115,10 @@ int main(int argc, char** argv) {
   app.add_option("--learning-rate", params.learning_rate, "shrinkage of each tree")
       ->check(CLI::Range(1e-4, 1.0))
       ->capture_default_str();
+  app.add_option("--decision", decision_level,
+                 "the decision level, instead of the one the training rows choose (docs/slip.md: "
+                 "chosen on a validation sweep)")
+      ->check(CLI::Range(-2.0, 2.0));
   tactile::cli::add_log_level(app, log_level);
   return tactile::cli::run(app, argc, argv, [&] {
     tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
@@ -234,12 +240,18 @@ int main(int argc, char** argv) {
         decision = levels[l];
       }
     }
+    if (decision_level) {
+      std::fprintf(stderr, "slip_train: decision %+.1f chosen on the training rows; %+.2f asked\n",
+                   decision, *decision_level);
+      decision = *decision_level;
+    }
     const std::string training = fmt::format(
-        "slip_train --seeds {} --scenarios {} --trees {} --depth {} --learning-rate {}{}: {} "
-        "rows, decision {:.1f}",
+        "slip_train --seeds {} --scenarios {} --trees {} --depth {} --learning-rate {}{}{}: {} "
+        "rows, decision {:.2f}",
         seeds_text, scenarios, params.trees, params.depth, params.learning_rate,
-        max_time_s > 0 ? fmt::format(" --max-time {}", max_time_s) : std::string(), label.size(),
-        decision);
+        max_time_s > 0 ? fmt::format(" --max-time {}", max_time_s) : std::string(),
+        decision_level ? fmt::format(" --decision {}", *decision_level) : std::string(),
+        label.size(), decision);
     tactile::util::write_file_atomic(out, rig::train::model_source(model, decision, training));
     std::fprintf(stderr, "slip_train: wrote %s (%s)\n", out.c_str(), training.c_str());
     return 0;
