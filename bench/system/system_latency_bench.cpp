@@ -12,6 +12,9 @@
 //      Aravis receiver (tactile::camera::AravisCamera, what sensor_node uses, nothing else), and
 //      a ZeroMQ round trip (PUB/SUB out, DEALER/ROUTER back, through an echo process) with
 //      messages the size of the run's TactileFrames and ArmCommands, at the same rate.
+// Each rate runs once per camera region of --roi (default both): `auto`, the region of interest
+// sensor_node sets from the calibrations (its default), and `full`, whole frames; the transport
+// alone receives the same region as the pipeline beside it, so the two are compared like for like.
 // Prints a table, writes OUT/latency.json and OUT/latency.png; progress on standard error.
 #include <fcntl.h>
 #include <fmt/format.h>
@@ -37,6 +40,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -44,9 +48,11 @@
 #include <vector>
 #include <zmq.hpp>
 
+#include "tactile/calibration.hpp"
 #include "tactile/camera/aravis_camera.hpp"
 #include "tactile/camera/private_network.hpp"
 #include "tactile/cli/run.hpp"
+#include "tactile/config/calibration_file.hpp"
 #include "tactile/plot/figure.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/files.hpp"
@@ -77,7 +83,10 @@ struct Settings {
   fs::path out = "out/latency";
   bool plot = true;
   bool skip_transport = false;
-  int runs = 1;                 // pipeline + transport runs per rate (the p50s move between runs)
+  int runs = 1;  // pipeline + transport runs per rate (the p50s move between runs)
+  // The cameras' regions, each run at every rate: "auto" (sensor_node's region of interest from
+  // the calibration) and "full" (whole frames), as sensor_node's --roi.
+  std::vector<std::string> rois{"auto", "full"};
   bool idle_subscriber = true;  // the benchmark's subscriber under SCHED_IDLE (IdleScheduling)
   // sensor_node and hand_node under SCHED_FIFO at this priority (their configurations' realtime
   // section), and the transport alone's receivers and echo likewise (FifoScheduling); 0: none.
@@ -726,7 +735,7 @@ void read_rig_report(const fs::path& report, const fs::path& log_path, PipelineR
 class PipelineProcesses {
  public:
   PipelineProcesses(const Settings& s, const Programs& prog, const fs::path& scenario,
-                    const fs::path& dir)
+                    const std::string& roi, const fs::path& dir)
       : dir_(dir),
         report_(dir / "report.json"),
         rig_("rig",
@@ -734,7 +743,8 @@ class PipelineProcesses {
               "--wait-for-hand", fmt::format("{}", s.start_timeout_s), "--log-level", "debug"},
              dir / "logs" / "rig.log"),
         sensor_("sensor_node",
-                {prog.sensor.string(), "--config", (dir / "config" / "sensor_node.yaml").string()},
+                {prog.sensor.string(), "--config", (dir / "config" / "sensor_node.yaml").string(),
+                 "--roi", roi},
                 dir / "logs" / "sensor_node.log"),
         hand_("hand_node",
               {prog.hand.string(), "--config", (dir / "config" / "hand_node.yaml").string()},
@@ -1080,7 +1090,8 @@ void slip_to_recompress(Decoded& d, double fps, PipelineResult& r) {
   }
 }
 
-PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) {
+PipelineResult run_pipeline(const Settings& s, double fps, const std::string& roi,
+                            const fs::path& dir) {
   PipelineResult r;
   r.fps = fps;
   fs::create_directories(dir / "config");
@@ -1100,9 +1111,10 @@ PipelineResult run_pipeline(const Settings& s, double fps, const fs::path& dir) 
   cap.reserve(static_cast<std::size_t>(fps * 4 * (s.seconds + s.warmup_s + 30)));
 
   r.load_at_start = load_average();
-  PipelineProcesses procs(s, prog, scenario, dir);
-  progress(
-      fmt::format("{:.0f} fps: rig, sensor_node and hand_node started; waiting for the task", fps));
+  PipelineProcesses procs(s, prog, scenario, roi, dir);
+  progress(fmt::format(
+      "{:.0f} fps, roi {}: rig, sensor_node and hand_node started; waiting for the task", fps,
+      roi));
   if (!wait_for_task(s, sub, cap, procs.children()))
     procs.fail(
         fmt::format("{:.0f} fps: the task did not start within {} s", fps, s.start_timeout_s));
@@ -1145,12 +1157,15 @@ struct AravisResult {
   std::uint64_t lost = 0;
   double receiver_cpu = std::nan("");  // this process (the two receivers), % of one core
   double rig_cpu = std::nan("");
+  std::array<Region, 2> regions{};  // what each receiver set (width 0: whole frames)
 };
 
 // The rig alone serves its two fake cameras (the same images, rate and timestamps as in the
 // pipeline); a plain Aravis receiver per camera in this process takes the frames and does
-// nothing with them.
-AravisResult run_aravis(const Settings& s, double fps, const fs::path& dir) {
+// nothing with them. With roi "auto" each receiver sets the region of interest sensor_node set
+// in the pipeline run (from the calibrations that run's configuration holds, dir/config).
+AravisResult run_aravis(const Settings& s, double fps, const std::string& roi,
+                        const fs::path& dir) {
   AravisResult r;
   const fs::path rig = program(s, "rig/rig");
   const double budget = s.transport_seconds + 60.0;
@@ -1174,13 +1189,18 @@ AravisResult run_aravis(const Settings& s, double fps, const fs::path& dir) {
   // Before the receivers: their stream threads inherit it.
   const FifoScheduling fifo(s.realtime_priority);
   std::vector<std::unique_ptr<camera::AravisCamera>> receivers;
-  for (const char* address : kCameraAddresses) {
+  // rig --write-configs names the calibrations after the fingertips, in the cameras' order.
+  constexpr const char* kCalibrations[2] = {"left.yaml", "right.yaml"};
+  for (std::size_t c = 0; c < 2; ++c) {
     camera::AravisCameraOptions o;
-    o.camera = address;
+    o.camera = kCameraAddresses[c];
     o.width = width;
     o.height = height;
     o.pixel_format = depth == 16 ? PixelFormat::kMono16 : PixelFormat::kMono8;
     o.frame_rate_hz = fps;
+    if (roi == "auto")
+      o.region = region_of_interest(config::load_calibration(dir / "config" / kCalibrations[c]));
+    r.regions[c] = o.region;
     receivers.push_back(std::make_unique<camera::AravisCamera>(o));
     receivers.back()->start();
   }
@@ -1367,7 +1387,8 @@ ZmqResult run_zmq(const Settings& s, double fps, std::size_t frame_bytes, std::s
 // Report
 
 struct RateResult {
-  int run = 1;  // of Settings::runs at this rate
+  int run = 1;               // of Settings::runs at this rate
+  std::string roi = "auto";  // the cameras' region (Settings::rois)
   PipelineResult pipe;
   std::optional<AravisResult> aravis;
   std::optional<ZmqResult> zmq;
@@ -1391,6 +1412,7 @@ json result_json(const RateResult& rr) {
   const PipelineResult& p = rr.pipe;
   json j;
   j["fps"] = p.fps;
+  j["roi"] = rr.roi;
   j["run"] = rr.run;
   j["cameras"] = 2;
   j["window_s"] = p.window_s;
@@ -1453,6 +1475,11 @@ json result_json(const RateResult& rr) {
         {"received", a.frames}, {"complete", a.complete}, {"lost", a.lost}};
     j["transport"]["aravis_receiver_cpu_percent"] = a.receiver_cpu;
     j["transport"]["aravis_rig_cpu_percent"] = a.rig_cpu;
+    for (const Region& g : a.regions) {
+      j["transport"]["aravis_regions"].push_back(
+          g.width > 0 ? json{{"x", g.x}, {"y", g.y}, {"width", g.width}, {"height", g.height}}
+                      : json("whole frames"));
+    }
   }
   if (rr.zmq) {
     const ZmqResult& z = *rr.zmq;
@@ -1484,10 +1511,10 @@ void print_runs_summary(const std::vector<RateResult>& rs, const Settings& s) {
       "transport alone p50 | added p50 | (added over the per-frame transport) | runs with "
       "added <= 0.150 |\n|---|---|---|---|---|---|\n",
       s.runs);
-  std::map<double, std::vector<const RateResult*>> by_rate;
+  std::map<std::pair<double, std::string>, std::vector<const RateResult*>> by_rate;
   for (const RateResult& rr : rs)
-    by_rate[rr.pipe.fps].push_back(&rr);
-  for (const auto& [fps, runs] : by_rate) {
+    by_rate[{rr.pipe.fps, rr.roi}].push_back(&rr);
+  for (const auto& [key, runs] : by_rate) {
     std::vector<double> e2e, alone, added, added1;
     std::string e2e_s, alone_s, added_s, added1_s;
     int met = 0;
@@ -1506,7 +1533,9 @@ void print_runs_summary(const std::vector<RateResult>& rs, const Settings& s) {
       added_s += sep + ms(a);
       added1_s += sep + ms(rr->pipe.e2e.p50 - t1);
     }
-    std::printf("| %.0f | %s: **%s** | %s: **%s** | %s: **%s** | %s: **%s** | %d of %zu |\n", fps,
+    std::printf("| %s | %s: **%s** | %s: **%s** | %s: **%s** | %s: **%s** | %d of %zu |\n",
+                s.rois.size() > 1 ? fmt::format("{:.0f}, roi {}", key.first, key.second).c_str()
+                                  : fmt::format("{:.0f}", key.first).c_str(),
                 e2e_s.c_str(), ms(percentile(e2e, 0.5)).c_str(), alone_s.c_str(),
                 ms(percentile(alone, 0.5)).c_str(), added_s.c_str(),
                 ms(percentile(added, 0.5)).c_str(), added1_s.c_str(),
@@ -1514,10 +1543,13 @@ void print_runs_summary(const std::vector<RateResult>& rs, const Settings& s) {
   }
 }
 
-// A table row's first cell: the rate, and the run when there are several.
+// A table row's first cell: the rate, the region when several were run, and the run when there
+// are several.
 std::string row_label(const RateResult& rr, const Settings& s) {
-  return s.runs > 1 ? fmt::format("{:.0f} #{}", rr.pipe.fps, rr.run)
-                    : fmt::format("{:.0f}", rr.pipe.fps);
+  std::string label = fmt::format("{:.0f}", rr.pipe.fps);
+  if (s.rois.size() > 1) label += ", roi " + rr.roi;
+  if (s.runs > 1) label += fmt::format(" #{}", rr.run);
+  return label;
 }
 
 // What was run, and per rate: end to end against the transport alone, and CPU.
@@ -1723,8 +1755,9 @@ void print_targets(const RateResult& rr, const Settings& s) {
     return !measured ? "not measured" : ok ? "met" : "NOT met";
   };
   std::printf(
-      "\nTargets (two cameras, 200 fps%s):\n\n| target | measured | verdict |\n|---|---|---|\n",
-      s.runs > 1 ? fmt::format(", run {} of {}", rr.run, s.runs).c_str() : "");
+      "\nTargets (two cameras, 200 fps, roi %s%s):\n\n| target | measured | verdict "
+      "|\n|---|---|---|\n",
+      rr.roi.c_str(), s.runs > 1 ? fmt::format(", run {} of {}", rr.run, s.runs).c_str() : "");
   std::printf("| end to end p50 <= 1 ms | %s ms | %s |\n", ms(p.e2e.p50).c_str(),
               verdict(std::isfinite(p.e2e.p50), p.e2e.p50 <= 1.0));
   std::printf("| end to end p99 <= 3 ms (max reported) | %s ms (max %s ms) | %s |\n",
@@ -1796,10 +1829,13 @@ void write_plot(const std::vector<RateResult>& rs, const fs::path& path) {
     panel.x_label("latency [ms]").y_label("commands");
     plot::Style st;
     st.color = plot::palette(i);
-    const std::string label =
-        beyond == 0 ? fmt::format("{:.0f} fps", rs[i].pipe.fps)
-                    : fmt::format("{:.0f} fps ({} beyond {:.2f} ms, max {:.1f} ms)", rs[i].pipe.fps,
-                                  beyond, hi, rs[i].pipe.cam_to_send_fresh.max);
+    const std::string rate =
+        fmt::format("{:.0f} fps, {}", rs[i].pipe.fps,
+                    rs[i].roi == "auto" ? "region of interest" : "whole frames");
+    const std::string label = beyond == 0
+                                  ? rate
+                                  : fmt::format("{} ({} beyond {:.2f} ms, max {:.1f} ms)", rate,
+                                                beyond, hi, rs[i].pipe.cam_to_send_fresh.max);
     panel.histogram(in_range, 60, label, st, 0.0, hi);
   }
   fig.save_png(path);
@@ -1820,40 +1856,46 @@ int run(const Settings& s, const fs::path& self) {
                      {"warmup_s", s.warmup_s},
                      {"transport_seconds", s.transport_seconds},
                      {"runs", s.runs},
+                     {"rois", s.rois},
                      {"realtime_priority", s.realtime_priority},
                      {"scenario", s.scenario.string()}};
   for (const double fps : s.rates) {
     for (int run = 1; run <= s.runs; ++run) {
-      const fs::path dir = s.runs > 1
-                               ? s.out / fmt::format("{}fps", fps) / fmt::format("run{}", run)
-                               : s.out / fmt::format("{}fps", fps);
-      fs::create_directories(dir / "logs");
+      const fs::path run_dir = s.runs > 1
+                                   ? s.out / fmt::format("{}fps", fps) / fmt::format("run{}", run)
+                                   : s.out / fmt::format("{}fps", fps);
       if (s.runs > 1) progress(fmt::format("{:.0f} fps: run {} of {}", fps, run, s.runs));
-      RateResult rr;
-      rr.run = run;
-      rr.pipe = run_pipeline(s, fps, dir);
-      progress(
-          fmt::format("{:.0f} fps: end to end p50 {} ms, p99 {} ms, max {} ms; {} frames, {} "
-                      "incomplete",
-                      fps, ms(rr.pipe.e2e.p50), ms(rr.pipe.e2e.p99), ms(rr.pipe.e2e.max),
-                      rr.pipe.frames, rr.pipe.frames_incomplete));
-      if (!s.skip_transport) {
-        progress(fmt::format("{:.0f} fps: transport alone, Aravis receive ({} s)", fps,
-                             s.transport_seconds));
-        rr.aravis = run_aravis(s, fps, dir);
-        progress(fmt::format("{:.0f} fps: transport alone, ZeroMQ round trip ({} s)", fps,
-                             s.transport_seconds));
-        rr.zmq = run_zmq(s, fps, rr.pipe.frame_bytes_p50, rr.pipe.command_bytes_p50, self, dir);
+      // The regions one after the other within a run, so both meet the same machine.
+      for (const std::string& roi : s.rois) {
+        const fs::path dir = s.rois.size() > 1 ? run_dir / ("roi-" + roi) : run_dir;
+        const std::string at = fmt::format("{:.0f} fps, roi {}", fps, roi);
+        fs::create_directories(dir / "logs");
+        RateResult rr;
+        rr.run = run;
+        rr.roi = roi;
+        rr.pipe = run_pipeline(s, fps, roi, dir);
+        progress(
+            fmt::format("{}: end to end p50 {} ms, p99 {} ms, max {} ms; {} frames, {} incomplete",
+                        at, ms(rr.pipe.e2e.p50), ms(rr.pipe.e2e.p99), ms(rr.pipe.e2e.max),
+                        rr.pipe.frames, rr.pipe.frames_incomplete));
+        if (!s.skip_transport) {
+          progress(
+              fmt::format("{}: transport alone, Aravis receive ({} s)", at, s.transport_seconds));
+          rr.aravis = run_aravis(s, fps, roi, dir);
+          progress(fmt::format("{}: transport alone, ZeroMQ round trip ({} s)", at,
+                               s.transport_seconds));
+          rr.zmq = run_zmq(s, fps, rr.pipe.frame_bytes_p50, rr.pipe.command_bytes_p50, self, dir);
+        }
+        all["rates"].push_back(result_json(rr));
+        results.push_back(std::move(rr));
+        util::write_file_atomic(s.out / "latency.json", all.dump(2) + "\n");
       }
-      all["rates"].push_back(result_json(rr));
-      results.push_back(std::move(rr));
-      util::write_file_atomic(s.out / "latency.json", all.dump(2) + "\n");
     }
   }
   print_tables(results, s);
   progress(fmt::format("wrote {}", (s.out / "latency.json").string()));
   if (s.plot) {
-    // A panel per rate: its first run.
+    // A panel per rate and region: its first run.
     std::vector<RateResult> first;
     std::copy_if(results.begin(), results.end(), std::back_inserter(first),
                  [](const RateResult& rr) { return rr.run == 1; });
@@ -1890,7 +1932,7 @@ int main(int argc, char** argv) {
       "namespace: the real rig (real time), sensor_node and hand_node as processes, then the "
       "transport alone (the rig's fake GigE Vision cameras to a plain Aravis receiver; a ZeroMQ "
       "PUB/SUB + DEALER/ROUTER round trip). Prints tables, writes OUT/latency.json and "
-      "OUT/latency.png, the programs' logs and configurations under OUT/<fps>fps/.");
+      "OUT/latency.png, the programs' logs and configurations under OUT/<fps>fps/roi-<roi>/.");
   app.add_option("--fps", s.rates, "frame rates, both cameras")
       ->delimiter(',')
       ->check(CLI::Range(1.0, 1000.0))
@@ -1915,6 +1957,13 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile)
       ->capture_default_str();
   app.add_option("--out", s.out, "output directory")->capture_default_str();
+  app.add_option("--roi", s.rois,
+                 "the cameras' regions, each run at every rate: auto (sensor_node's region of "
+                 "interest from the calibrations, its default) and full (whole frames); the "
+                 "transport alone receives the same region")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"auto", "full"}))
+      ->capture_default_str();
   app.add_flag("!--no-plot", s.plot, "do not write latency.png");
   app.add_flag("--skip-transport", s.skip_transport, "only the pipeline, not the transport alone");
   app.add_option("--runs", s.runs,
@@ -1930,6 +1979,8 @@ int main(int argc, char** argv) {
                  "ZeroMQ ends likewise; needs root or CAP_SYS_NICE (default 0: the normal policy)")
       ->check(CLI::Range(0, 98));
   return tactile::cli::run(app, argc, argv, [&] {
+    if (std::set<std::string>(s.rois.begin(), s.rois.end()).size() != s.rois.size())
+      throw tactile::cli::UsageError("--roi names a region twice");
     // Refused now rather than after the first run: try it once on this thread and drop it.
     { const tactile::bench::FifoScheduling probe(s.realtime_priority); }
     return tactile::bench::run(s, self);
