@@ -77,6 +77,10 @@ int run(int argc, char** argv) {
                  "real time: serve the cameras inside this network namespace (a name `ip netns "
                  "add` made, or a path such as /proc/PID/ns/net): behind a link of their own, "
                  "which scripts/run-system shapes to line rate; root");
+  app.add_option("--camera-packet-size", rt.camera_packet_size,
+                 "--write-configs: the GVSP packet size sensor_node asks of the cameras (at most "
+                 "the camera link's MTU; default: sensor_node's)")
+      ->check(CLI::Range(576, 65500));
   app.add_option("--arm", rt.arm_endpoint, "real time: the arm controller's endpoint")
       ->capture_default_str();
   app.add_option("--truth", rt.truth_endpoint, "real time: ground-truth PUB endpoint (empty: none)")

@@ -656,9 +656,12 @@ void write_node_configs(const Scenario& sc, const std::filesystem::path& dir,
     // The reference is saved on first capture and loaded on a restart: a sensor_node restarted
     // while the hand squeezes never takes a reference under load.
     sensor += fmt::format(
-        "  - {{sensor_id: {}, camera: {}, calibration: {}.yaml, fps: {}, reference_cache: "
+        "  - {{sensor_id: {}, camera: {}, calibration: {}.yaml, fps: {}, {}reference_cache: "
         "state/{}-reference.pgm}}\n",
-        ids[i], opt.camera_addresses[i], ids[i], sc.camera.fps, ids[i]);
+        ids[i], opt.camera_addresses[i], ids[i], sc.camera.fps,
+        opt.camera_packet_size > 0 ? fmt::format("packet_size: {}, ", opt.camera_packet_size)
+                                   : std::string(),
+        ids[i]);
   }
   util::write_file_atomic(dir / "sensor_node.yaml", sensor);
   std::string hand = fmt::format(

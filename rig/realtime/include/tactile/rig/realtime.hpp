@@ -27,6 +27,9 @@ struct RealtimeOptions {
   // under /run/netns or a path), the rest of the rig staying where it runs: the cameras behind
   // a link of their own. Empty: where the rig runs.
   std::string camera_netns;
+  // The GVSP packet size rig --write-configs gives sensor_node (`packet_size`, at most the camera
+  // link's MTU); 0: sensor_node's default.
+  int camera_packet_size = 0;
   std::string arm_endpoint = "tcp://*:5556";    // the arm controller's ROUTER
   std::string truth_endpoint = "tcp://*:5557";  // ground truth PUB; empty: none
   // What the rig watches to score the run: sensor_node's frames and hand_node's events.
