@@ -225,7 +225,23 @@ void HandNode::step(std::int64_t now_ns, FramePairing::Fresh fresh) {
   in.now_s = static_cast<double>(now_ns - start_ns_) * 1e-9;
 
   const control::ControllerOutput out = controller_.update(in);
-  if (out.command.kind != control::CommandKind::kNone) send_command(out.command, now_ns);
+  const std::int64_t decided_ns = util::realtime_ns();
+  const bool sent = out.command.kind != control::CommandKind::kNone;
+  if (sent) send_command(out.command, now_ns);
+  if (events_ && (fresh[0] || fresh[1])) {
+    // What this step decided on each fresh frame and when: every frame's decision is timed, not
+    // only those a command answers.
+    wire::Answers on;
+    for (std::size_t i = 0; i < control::kFingertips; ++i) {
+      if (fresh[i])
+        on.add({static_cast<std::int8_t>(i), frames_[i].header.sequence,
+                frames_[i].header.camera_timestamp_ns});
+    }
+    wire::fill_decision(out, decided_ns, on, received_ns_, sent ? command_sequence_ : 0, ids_,
+                        *decision_env_.mutable_decision());
+    wire::encode(decision_env_, out_bytes_);
+    events_->send(wire::kDecisionTopic, wire::bytes_of(out_bytes_));
+  }
   for (const control::Event& e : out.events) {
     ++counters_.events;
     const std::string where =

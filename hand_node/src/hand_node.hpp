@@ -70,6 +70,7 @@ class HandNode {
   wire::EnvelopeDecoder decoder_;
   v1::Envelope out_;
   v1::Envelope event_env_;
+  v1::Envelope decision_env_;  // one Decision per step on fresh frames (topic "decision")
   std::string out_bytes_;
   std::array<wire::ReceivedFrame, control::kFingertips> frames_;
   wire::ReceivedCommand unused_;

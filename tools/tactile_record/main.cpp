@@ -39,7 +39,8 @@ struct Options {
   std::vector<std::string> topics{
       tactile::wire::kFrameTopicPrefix, tactile::wire::kStatsTopicPrefix,
       tactile::wire::kEventTopic,       tactile::wire::kArmTopic,
-      tactile::wire::kCommandTopic,     tactile::wire::kTruthTopic};
+      tactile::wire::kCommandTopic,     tactile::wire::kDecisionTopic,
+      tactile::wire::kTruthTopic};
   bool raw_frames = false;
   double duration_s = 0;
   std::uint64_t count = 0;

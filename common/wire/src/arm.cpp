@@ -264,4 +264,35 @@ void fill_event(const control::Event& e, std::int64_t time_ns, const Answers& an
   fill_answers(answers, ids, *out.mutable_answers());
 }
 
+void fill_decision(const control::ControllerOutput& output, std::int64_t time_ns,
+                   const Answers& answers,
+                   const std::array<std::int64_t, control::kFingertips>& received_ns,
+                   std::uint64_t command_sequence, const FingertipIds& ids, v1::Decision& out) {
+  out.set_time_ns(time_ns);
+  fill_answers(answers, ids, *out.mutable_answers());
+  for (std::size_t i = 0; i < answers.count; ++i) {
+    const auto k = answers.refs[i].fingertip;
+    const bool known = k >= 0 && static_cast<std::size_t>(k) < received_ns.size();
+    (*out.mutable_answers())[static_cast<int>(i)].set_receive_timestamp_ns(
+        known ? received_ns[static_cast<std::size_t>(k)] : 0);
+  }
+  out.set_phase(control::to_string(output.phase));
+  out.set_command_sequence(command_sequence);
+  auto& tips = *out.mutable_fingertips();
+  while (tips.size() > static_cast<int>(ids.size()))
+    tips.RemoveLast();
+  while (tips.size() < static_cast<int>(ids.size()))
+    tips.Add();
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    const control::FingertipFlags& f = output.flags.fingertip[i];
+    v1::FingertipDecision& d = tips[static_cast<int>(i)];
+    d.set_sensor_id(ids[i]);
+    d.set_touch(f.touch);
+    d.set_slip(f.slip);
+    d.set_over(f.over);
+    d.set_slipping_elements(f.slipping_elements);
+    d.set_max_fz_n(std::isfinite(f.max_fz_n) ? f.max_fz_n : 0.0);
+  }
+}
+
 }  // namespace tactile::wire

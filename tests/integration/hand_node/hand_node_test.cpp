@@ -176,8 +176,18 @@ struct RunResult {
   // Commands whose two answers are frames of different exposures (camera timestamps).
   std::uint64_t commands_answering_two_exposures = 0;
   std::uint64_t heartbeats = 0;
-  int frames = 0;                        // exposures published (each to both fingertips)
-  std::size_t last_command_answers = 0;  // frames the last command names
+  // The Decisions hand_node published (topic "decision"): the frames each decided on, how often
+  // each frame was decided on, the decisions naming a frame this test never published or no
+  // receive time, those with a fingertip's SLIP flag, and the commands they say they sent.
+  std::uint64_t decisions = 0;
+  std::map<std::pair<std::string, std::uint64_t>, int> decided;
+  std::uint64_t decisions_naming_unknown_frames = 0;
+  std::uint64_t decisions_without_receive_time = 0;
+  std::uint64_t decisions_with_slip = 0;
+  std::set<std::uint64_t> decision_commands;
+  std::set<std::uint64_t> command_sequences;  // the commands received on the arm link
+  int frames = 0;                             // exposures published (each to both fingertips)
+  std::size_t last_command_answers = 0;       // frames the last command names
   // The longest time without any message from hand_node on the arm link, after its first.
   std::chrono::steady_clock::duration max_silence{};
   testing::ProcessResult process;
@@ -298,7 +308,7 @@ class HandNodeRun {
       });
     }
     testing::Garbage arm_garbage(valid, 11);
-    std::vector<std::string> topics{wire::kEventTopic};
+    std::vector<std::string> topics{wire::kEventTopic, wire::kDecisionTopic};
     if (bridged) topics.insert(topics.end(), {wire::kCommandTopic, wire::kArmTopic});
     wire::Subscriber events(ctx, {events_endpoint}, topics);
 
@@ -329,6 +339,7 @@ class HandNodeRun {
         }
       }
       last_command = cmd.sequence;
+      r.command_sequences.insert(cmd.sequence);
       r.last_command_answers = cmd.answers.count;
       world.apply(cmd.command);
       r.commands.push_back(cmd.command.kind);
@@ -351,6 +362,18 @@ class HandNodeRun {
       if (env.has_event()) {
         r.events.push_back(env.event().kind());
         r.event_cycles.push_back(env.event().cycle());
+      } else if (env.has_decision()) {
+        const v1::Decision& d = env.decision();
+        ++r.decisions;
+        for (const v1::FrameRef& f : d.answers()) {
+          ++r.decided[{f.sensor_id(), f.sequence()}];
+          if (!published.count({f.sensor_id(), f.sequence()})) ++r.decisions_naming_unknown_frames;
+          if (f.receive_timestamp_ns() <= 0) ++r.decisions_without_receive_time;
+        }
+        if (std::any_of(d.fingertips().begin(), d.fingertips().end(),
+                        [](const v1::FingertipDecision& t) { return t.slip(); }))
+          ++r.decisions_with_slip;
+        if (d.command_sequence() > 0) r.decision_commands.insert(d.command_sequence());
       } else if (env.has_arm_command()) {
         on_command();
       } else if (env.has_arm_state()) {
@@ -428,6 +451,7 @@ class HandNodeRun {
         // The Stop on the way out often lands here (a loaded machine): it is the last command.
         r.last_command_answers = cmd.answers.count;
         r.commands.push_back(cmd.command.kind);
+        r.command_sequences.insert(cmd.sequence);
       }
     }
     return r;
@@ -525,6 +549,30 @@ TEST(HandNode, RunsThePapersTaskAndEndsDone) {
   EXPECT_LT(unpaired, static_cast<std::uint64_t>(r.frames) / 4) << r.process.err;
   EXPECT_EQ(r.commands.back(), control::CommandKind::kStop);
   EXPECT_GT(r.heartbeats, 0U);
+  // A Decision per step on fresh frames: every frame decided on once, frames this test published,
+  // with hand_node's receive time; nearly every published frame is decided on (hand_node starts
+  // after start_after_frames, and a PUB/SUB subscriber misses what came before it joined).
+  EXPECT_GT(r.decisions, 0U);
+  EXPECT_EQ(r.decisions_naming_unknown_frames, 0U);
+  EXPECT_EQ(r.decisions_without_receive_time, 0U);
+  const auto twice = std::count_if(r.decided.begin(), r.decided.end(),
+                                   [](const auto& kv) { return kv.second != 1; });
+  EXPECT_EQ(twice, 0);
+  std::map<std::string, std::uint64_t> first;  // per sensor, the first frame decided on
+  for (const auto& [frame, n] : r.decided) {
+    if (!first.count(frame.first)) first[frame.first] = frame.second;
+  }
+  ASSERT_EQ(first.size(), 2U);
+  std::uint64_t after_first = 0;  // frames published from each sensor's first decided one on
+  for (const auto& [sensor, from] : first)
+    after_first += static_cast<std::uint64_t>(r.frames) - from;
+  EXPECT_GT(r.decided.size(), after_first * 9 / 10)
+      << r.decisions << " decisions of " << after_first << " frames";
+  // The injected slips were decided as such, and every command a decision names reached the arm.
+  EXPECT_GE(r.decisions_with_slip, 4U);
+  ASSERT_FALSE(r.decision_commands.empty());
+  for (const std::uint64_t c : r.decision_commands)
+    EXPECT_TRUE(r.command_sequences.count(c)) << "command " << c;
 }
 
 // Phase I (grasp-move-release) with `arm_command` (a real process given --endpoint) as the arm

@@ -101,7 +101,7 @@ TEST(RunSystem, EndpointsReachableFromTheHostAndTheRunRecordedWithRawFrames) {
   const auto log = read_log(inside);
   EXPECT_EQ(log.end, recording::ReadStatus::kEnd);
   for (const std::string topic : {"frame/left", "frame/right", "raw/left", "raw/right",
-                                  "stats/left", "event", "arm", "command", "truth"})
+                                  "stats/left", "event", "arm", "command", "decision", "truth"})
     EXPECT_GT(count(log, topic), 0) << topic;
   // ... which the measurement core measures again bit for bit.
   const auto config = dir / "out/config";

@@ -343,6 +343,44 @@ TEST(Event, FillsEveryField) {
   EXPECT_EQ(msg.answers(0).sequence(), 500U);
 }
 
+// --- Decision ------------------------------------------------------------------------------
+
+TEST(Decision, FillsTheFreshFramesTheirReceiveTimesAndEachFingertipsFlags) {
+  control::ControllerOutput out;
+  out.phase = control::Phase::kLift;
+  out.flags.fingertip[1].slip = true;
+  out.flags.fingertip[1].touch = true;
+  out.flags.fingertip[1].slipping_elements = 3;
+  out.flags.fingertip[1].max_fz_n = 0.4;
+  out.flags.fingertip[0].max_fz_n = std::nan("");
+  Answers on;
+  on.add({1, 77, 1'000});
+  const std::array<std::int64_t, control::kFingertips> received{5'000, 6'000};
+  v1::Decision d;
+  // Filled twice, the second over the first: storage reused, nothing left of the first.
+  on.add({0, 76, 900});
+  fill_decision(out, 9'000, on, received, 12, kIds, d);
+  on.count = 1;
+  fill_decision(out, 9'500, on, received, 0, kIds, d);
+  EXPECT_EQ(d.time_ns(), 9'500);
+  ASSERT_EQ(d.answers_size(), 1);
+  EXPECT_EQ(d.answers(0).sensor_id(), "right");
+  EXPECT_EQ(d.answers(0).sequence(), 77U);
+  EXPECT_EQ(d.answers(0).camera_timestamp_ns(), 1'000);
+  EXPECT_EQ(d.answers(0).receive_timestamp_ns(), 6'000);
+  EXPECT_EQ(d.phase(), control::to_string(control::Phase::kLift));
+  EXPECT_EQ(d.command_sequence(), 0U);
+  ASSERT_EQ(d.fingertips_size(), 2);
+  EXPECT_EQ(d.fingertips(0).sensor_id(), "left");
+  EXPECT_FALSE(d.fingertips(0).slip());
+  EXPECT_EQ(d.fingertips(0).max_fz_n(), 0.0);  // not finite: 0 on the wire
+  EXPECT_TRUE(d.fingertips(1).slip());
+  EXPECT_TRUE(d.fingertips(1).touch());
+  EXPECT_FALSE(d.fingertips(1).over());
+  EXPECT_EQ(d.fingertips(1).slipping_elements(), 3U);
+  EXPECT_DOUBLE_EQ(d.fingertips(1).max_fz_n(), 0.4);
+}
+
 // --- the topics -----------------------------------------------------------------------------
 
 // Recorded logs, tools/python and users' subscriptions spell these names: they are fixed.
@@ -353,6 +391,7 @@ TEST(Topics, NamesOnTheWireAreFixed) {
   EXPECT_STREQ(kEventTopic, "event");
   EXPECT_STREQ(kCommandTopic, "command");
   EXPECT_STREQ(kArmTopic, "arm");
+  EXPECT_STREQ(kDecisionTopic, "decision");
   EXPECT_STREQ(kTruthTopic, "truth");
   // A prefix subscription to a kind receives each sensor's topic of that kind.
   EXPECT_TRUE(frame_topic("right").starts_with(kFrameTopicPrefix));

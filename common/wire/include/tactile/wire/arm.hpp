@@ -83,6 +83,16 @@ control::ArmFeedback to_feedback(const ArmStateData& state);
 void fill_event(const control::Event& event, std::int64_t time_ns, const Answers& answers,
                 const FingertipIds& ids, v1::Event& out);
 
+// --- Decision ------------------------------------------------------------------------------
+
+// The fresh frames a controller step ran on (`answers`, with when each arrived, indexed by
+// fingertip: `received_ns`), what it decided (`output`'s phase and flags) and the ArmCommand it
+// sent (`command_sequence`, 0 for none). Reuses `out`'s storage: no allocation once warm.
+void fill_decision(const control::ControllerOutput& output, std::int64_t time_ns,
+                   const Answers& answers,
+                   const std::array<std::int64_t, control::kFingertips>& received_ns,
+                   std::uint64_t command_sequence, const FingertipIds& ids, v1::Decision& out);
+
 v1::EventKind to_proto(control::EventKind kind);
 // The control phase named by an Event's `phase` text (control::to_string); nullopt if none.
 std::optional<control::Phase> phase_from_string(std::string_view name);

@@ -31,6 +31,8 @@ inline constexpr const char* kEventTopic = "event";
 inline constexpr const char* kCommandTopic = "command";
 // and every ArmState Envelope it receives from the arm (the arm link is point to point).
 inline constexpr const char* kArmTopic = "arm";
+// and a Decision Envelope per controller step run on fresh frames (what it decided on each).
+inline constexpr const char* kDecisionTopic = "decision";
 // The rig, a GroundTruth Envelope per rendered frame.
 inline constexpr const char* kTruthTopic = "truth";
 

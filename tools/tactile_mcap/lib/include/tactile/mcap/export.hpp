@@ -2,8 +2,8 @@
 
 // A tactile log (docs/recording.md) as an MCAP file that Foxglove and PlotJuggler open: one
 // channel per topic (and message type), the Envelope unwrapped so that each message is the
-// TactileFrame, SensorStats, Event, GroundTruth, ArmCommand, ArmState or Heartbeat it carries,
-// raw camera frames as tactile.v1.RawFrame; every schema embedded as a FileDescriptorSet
+// TactileFrame, SensorStats, Event, Decision, GroundTruth, ArmCommand, ArmState or Heartbeat it
+// carries, raw camera frames as tactile.v1.RawFrame; every schema embedded as a FileDescriptorSet
 // (schema encoding "protobuf", message encoding "protobuf"). log_time is the record's receive
 // time, publish_time the message's own time where it has one (docs/recording.md#mcap-export).
 #include <google/protobuf/descriptor.h>
