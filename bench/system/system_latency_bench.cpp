@@ -486,6 +486,12 @@ struct RefInfo {
   std::int64_t hand_receive_ns = 0;
 };
 
+// One Decision (hand_node's "decision" topic): a controller step on fresh frames.
+struct DecisionInfo {
+  std::int64_t time_ns = 0;
+  std::vector<RefInfo> answers;
+};
+
 struct CommandInfo {
   std::uint64_t sequence = 0;
   std::int64_t send_ns = 0;
@@ -528,6 +534,13 @@ struct PipelineResult {
   Dist cam_to_send_all_no_hold;
   std::map<std::string, std::uint64_t> command_kinds;
   std::vector<double> cam_to_send_fresh_samples;
+  // Every whole frame of the window, from hand_node's Decisions (one per step on fresh frames):
+  // camera timestamp -> decided, and hand_node received -> decided; the window's whole frames
+  // no Decision names (missed by this benchmark's subscriber, or never run by the controller).
+  Dist cam_to_decision;
+  Dist receive_to_decision;
+  std::uint64_t decisions = 0;
+  std::uint64_t frames_without_decision = 0;
   std::uint64_t frames = 0;
   std::uint64_t frames_complete = 0;
   std::uint64_t frames_incomplete = 0;  // status other than COMPLETE (NO_REFERENCE apart)
@@ -788,6 +801,7 @@ using SlipTruth = std::map<std::string, std::vector<std::pair<std::int64_t, bool
 struct Decoded {
   std::map<FrameKey, FrameInfo> frames;
   std::vector<CommandInfo> commands;
+  std::vector<DecisionInfo> decisions;
   std::vector<v1::Event> recompress;
   SlipTruth truth;
 };
@@ -873,6 +887,12 @@ Decoded decode_captured(const std::vector<Captured>& cap, const Window& w, Pipel
     } else if (env.has_arm_command()) {
       d.commands.push_back(command_info(env.arm_command()));
       if (in_window) command_bytes.push_back(static_cast<double>(c.payload.size()));
+    } else if (env.has_decision()) {
+      DecisionInfo di{env.decision().time_ns(), {}};
+      for (const v1::FrameRef& ref : env.decision().answers())
+        di.answers.push_back({ref.sensor_id(), ref.sequence(), ref.camera_timestamp_ns(),
+                              ref.receive_timestamp_ns()});
+      d.decisions.push_back(std::move(di));
     } else if (env.has_event()) {
       ++r.events[v1::EventKind_Name(env.event().kind())];
       if (env.event().kind() == v1::EVENT_KIND_RECOMPRESS) d.recompress.push_back(env.event());
@@ -982,6 +1002,32 @@ void command_stages(const Decoded& d, const Window& w, PipelineResult& r) {
   r.cam_to_send_all = dist(all);
   r.cam_to_send_all_no_hold = dist(all_no_hold);
   r.cam_to_send_fresh_samples = fresh;
+}
+
+// Camera -> decided and hand_node received -> decided, per whole frame of the window (its
+// camera timestamp in it), from the Decisions: every frame, not only those a command answers.
+void decision_stages(const Decoded& d, const Window& w, PipelineResult& r) {
+  std::vector<double> cam;
+  std::vector<double> recv;
+  std::set<FrameKey> decided;
+  for (const DecisionInfo& di : d.decisions) {
+    bool in_window = false;
+    for (const RefInfo& a : di.answers) {
+      const auto f = d.frames.find({a.sensor, a.sequence});
+      if (f == d.frames.end() || !whole_in_window(f->second, w)) continue;
+      in_window = true;
+      if (!decided.insert({a.sensor, a.sequence}).second) continue;
+      cam.push_back(static_cast<double>(di.time_ns - a.camera_ns) * 1e-6);
+      if (a.hand_receive_ns > 0)
+        recv.push_back(static_cast<double>(di.time_ns - a.hand_receive_ns) * 1e-6);
+    }
+    if (in_window) ++r.decisions;
+  }
+  for (const auto& [key, f] : d.frames) {
+    if (whole_in_window(f, w) && !decided.count(key)) ++r.frames_without_decision;
+  }
+  r.cam_to_decision = dist(cam);
+  r.receive_to_decision = dist(recv);
 }
 
 // A true slip episode of a fingertip starts where some element slides after a frame with none.
@@ -1106,7 +1152,8 @@ PipelineResult run_pipeline(const Settings& s, double fps, const std::string& ro
   // Everything the programs publish that the stages need; the rig's truth for slip onsets.
   wire::Subscriber sub(
       ctx, {"tcp://127.0.0.1:5555", "tcp://127.0.0.1:5557", "tcp://127.0.0.1:5558"},
-      {wire::kFrameTopicPrefix, wire::kTruthTopic, wire::kEventTopic, wire::kCommandTopic});
+      {wire::kFrameTopicPrefix, wire::kTruthTopic, wire::kEventTopic, wire::kCommandTopic,
+       wire::kDecisionTopic});
   std::vector<Captured> cap;
   cap.reserve(static_cast<std::size_t>(fps * 4 * (s.seconds + s.warmup_s + 30)));
 
@@ -1139,6 +1186,7 @@ PipelineResult run_pipeline(const Settings& s, double fps, const std::string& ro
   frame_stages(d.frames, w, r);
   frame_gaps(d.frames, w, fps, r);
   command_stages(d, w, r);
+  decision_stages(d, w, r);
   r.true_slip_episodes = true_slip_episodes(d.truth);
   slip_to_recompress(d, fps, r);
   return r;
@@ -1408,6 +1456,13 @@ double transport_alone_per_frame_p50(const RateResult& rr) {
   return rr.aravis->latency.p50 + rr.zmq->round_trip.p50;
 }
 
+// The transport a decision waits for, p50: an exposure's two frames through Aravis (the later of
+// the two), then ZeroMQ's PUB -> SUB to hand_node. NaN when either was not measured.
+double transport_to_decision_p50(const RateResult& rr) {
+  if (!rr.aravis || !rr.zmq) return std::nan("");
+  return rr.aravis->latency_pair.p50 + rr.zmq->pub_sub.p50;
+}
+
 json result_json(const RateResult& rr) {
   const PipelineResult& p = rr.pipe;
   json j;
@@ -1437,7 +1492,11 @@ json result_json(const RateResult& rr) {
       {"control", to_json(p.control)},
       {"camera_to_command_sent_freshest", to_json(p.cam_to_send_fresh)},
       {"camera_to_command_sent_all_answers", to_json(p.cam_to_send_all)},
-      {"camera_to_command_sent_all_answers_without_hold_stop", to_json(p.cam_to_send_all_no_hold)}};
+      {"camera_to_command_sent_all_answers_without_hold_stop", to_json(p.cam_to_send_all_no_hold)},
+      {"camera_to_decision_every_frame", to_json(p.cam_to_decision)},
+      {"hand_receive_to_decision_every_frame", to_json(p.receive_to_decision)}};
+  j["decisions"] = {{"in_window", p.decisions},
+                    {"whole_frames_without_decision", p.frames_without_decision}};
   j["command_kinds_in_window"] = p.command_kinds;
   j["frames"] = {{"published", p.frames},
                  {"complete", p.frames_complete},
@@ -1498,6 +1557,8 @@ json result_json(const RateResult& rr) {
     j["pipeline_added_p50_ms"] = p.e2e.p50 - t;
     j["pipeline_over_transport_p50"] = p.e2e.p50 / t;
     j["pipeline_added_over_per_frame_transport_p50_ms"] = p.e2e.p50 - t1;
+    j["transport"]["to_decision_p50_ms"] = transport_to_decision_p50(rr);
+    j["decision_added_p50_ms"] = p.cam_to_decision.p50 - transport_to_decision_p50(rr);
   }
   return j;
 }
@@ -1642,6 +1703,28 @@ void print_stages_table(const std::vector<RateResult>& rs, const Settings& s) {
         pp(p.control).c_str(), pp(p.cam_to_send_fresh).c_str(), pp(p.cam_to_send_all).c_str(),
         pp(p.cam_to_send_all_no_hold).c_str(), static_cast<unsigned long long>(p.commands),
         static_cast<unsigned long long>(holds == p.command_kinds.end() ? 0 : holds->second));
+  }
+}
+
+// Every whole frame's decision (hand_node's Decisions): thousands of samples where the commands
+// give a few dozen, and what the pipeline adds to the transport a decision waits for.
+void print_decisions_table(const std::vector<RateResult>& rs, const Settings& s) {
+  std::printf(
+      "\nEvery frame's decision (camera timestamp -> hand_node's decision on it; window), ms:\n\n"
+      "| fps | frames decided | whole frames without a decision | camera -> decision p50 / p99 / "
+      "max | hand_node receive -> decision p50 / p99 | transport alone to a decision p50 (Aravis, "
+      "later of two, + PUB -> SUB) | added p50 | ratio |\n|---|---|---|---|---|---|---|---|\n");
+  for (const RateResult& rr : rs) {
+    const PipelineResult& p = rr.pipe;
+    const double t = transport_to_decision_p50(rr);
+    std::printf("| %s | %zu | %llu | %s / %s / %s | %s / %s | %s | %s | %s |\n",
+                row_label(rr, s).c_str(), p.cam_to_decision.n,
+                static_cast<unsigned long long>(p.frames_without_decision),
+                ms(p.cam_to_decision.p50).c_str(), ms(p.cam_to_decision.p99).c_str(),
+                ms(p.cam_to_decision.max).c_str(), ms(p.receive_to_decision.p50).c_str(),
+                ms(p.receive_to_decision.p99).c_str(), ms(t).c_str(),
+                ms(p.cam_to_decision.p50 - t).c_str(),
+                std::isfinite(t) ? fmt::format("{:.2f}", p.cam_to_decision.p50 / t).c_str() : "-");
   }
 }
 
@@ -1795,6 +1878,7 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
   print_overview(rs, s);
   print_frames_table(rs, s);
   print_stages_table(rs, s);
+  print_decisions_table(rs, s);
   print_transport_table(rs, s);
   print_slip_table(rs, s);
   print_timestamp_warnings(rs, s);
