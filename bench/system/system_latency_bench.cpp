@@ -91,6 +91,12 @@ struct Settings {
   // sensor_node and hand_node under SCHED_FIFO at this priority (their configurations' realtime
   // section), and the transport alone's receivers and echo likewise (FifoScheduling); 0: none.
   int realtime_priority = 0;
+  // The cameras' link (scripts/camera-link): "loopback" (127.0.0.2 and .3 beside the nodes), or
+  // "shared" (both behind one veth pair shaped to link_rate) or "separate" (a pair each), at MTU
+  // link_mtu (sensor_node's and the receivers' GVSP packet size).
+  std::string camera_link = "loopback";
+  std::string link_rate = "1gbit";
+  int link_mtu = 1500;
 };
 
 void progress(const std::string& line) {
@@ -499,6 +505,15 @@ struct CommandInfo {
   std::vector<RefInfo> answers;
 };
 
+// A shaped camera link's queue counters (tc -s qdisc), summed over its links.
+struct LinkCounters {
+  std::uint64_t bytes = 0;
+  std::uint64_t packets = 0;
+  std::uint64_t dropped = 0;
+  std::uint64_t overlimits = 0;  // packets the bucket held back (over the rate)
+  bool known = false;
+};
+
 struct PipelineResult {
   double fps = 0;
   double window_s = 0;
@@ -566,6 +581,78 @@ struct PipelineResult {
   std::uint64_t publish_gaps_over_stale = 0;
   json long_gaps = json::array();
   std::map<std::string, std::uint64_t> events;
+  LinkCounters link;  // the cameras' link over the whole run (shaped links only)
+};
+
+// The cameras behind a shaped link for one run (scripts/camera-link, started from this network
+// namespace and stopped at the end, with its queue counters), or on loopback beside the nodes.
+class CameraLink {
+ public:
+  CameraLink(const Settings& s, const fs::path& log) : log_(log) {
+    if (s.camera_link == "loopback") return;
+    child_.emplace("camera-link",
+                   std::vector<std::string>{"/bin/bash",
+                                            (fs::path(TACTILE_SOURCE_DIR) / "scripts/camera-link")
+                                                .string(),
+                                            s.camera_link, "--rate", s.link_rate, "--mtu",
+                                            std::to_string(s.link_mtu)},
+                   log);
+    // Its first line: "cameras A,B netns NS links N".
+    const std::int64_t deadline = util::monotonic_ns() + 20'000'000'000;
+    while (util::monotonic_ns() < deadline) {
+      std::ifstream in(log);
+      for (std::string line; std::getline(in, line);) {
+        std::istringstream words(line);
+        std::string c, cameras, n, netns;
+        if (words >> c >> cameras >> n >> netns && c == "cameras" && n == "netns") {
+          const auto comma = cameras.find(',');
+          cameras_ = {cameras.substr(0, comma), cameras.substr(comma + 1)};
+          netns_ = netns;
+          return;
+        }
+      }
+      if (!child_->running()) break;
+      std::this_thread::sleep_for(milliseconds(20));
+    }
+    child_->stop(milliseconds(3000));
+    throw std::runtime_error(
+        fmt::format("the {} camera link did not come up:{}", s.camera_link, tail_of(log)));
+  }
+  CameraLink(const CameraLink&) = delete;
+  CameraLink& operator=(const CameraLink&) = delete;
+
+  const std::array<std::string, 2>& cameras() const { return cameras_; }
+  // rig's options for it (none on loopback, where its cameras are where they always are).
+  std::vector<std::string> rig_options() const {
+    if (!child_) return {};
+    return {"--cameras", cameras_[0] + "," + cameras_[1], "--camera-netns", netns_};
+  }
+  // Stops it; the link(s)' counters, summed ("camera-link: camera link I: Sent B bytes P pkt
+  // (dropped D, overlimits O ...").
+  LinkCounters stop() {
+    LinkCounters c;
+    if (!child_) return c;
+    child_->stop(milliseconds(5000));
+    std::ifstream in(log_);
+    const std::regex re(
+        "camera link \\d+: Sent (\\d+) bytes (\\d+) pkt \\(dropped (\\d+), overlimits (\\d+)");
+    for (std::string line; std::getline(in, line);) {
+      std::smatch m;
+      if (!std::regex_search(line, m, re)) continue;
+      c.bytes += std::stoull(m[1]);
+      c.packets += std::stoull(m[2]);
+      c.dropped += std::stoull(m[3]);
+      c.overlimits += std::stoull(m[4]);
+      c.known = true;
+    }
+    return c;
+  }
+
+ private:
+  fs::path log_;
+  std::optional<Child> child_;
+  std::array<std::string, 2> cameras_{kCameraAddresses[0], kCameraAddresses[1]};
+  std::string netns_;
 };
 
 fs::path program(const Settings& s, const char* rel) {
@@ -633,13 +720,18 @@ Programs find_programs(const Settings& s) {
 
 // The scenario at `fps` and the programs' configurations from rig --write-configs, with the
 // real-time priority added when asked for. Returns the scenario.
-fs::path write_configs(const Settings& s, double fps, const fs::path& dir, const fs::path& rig) {
+fs::path write_configs(const Settings& s, double fps, const fs::path& dir, const fs::path& rig,
+                       const CameraLink& link) {
   const double budget = s.start_timeout_s + s.warmup_s + s.seconds + 60.0;
   const fs::path scenario = write_scenario(s, fps, budget, dir);
-  run_checked(
-      "rig --write-configs",
-      {rig.string(), "--scenario", scenario.string(), "--write-configs", (dir / "config").string()},
-      dir / "logs" / "rig.log");
+  std::vector<std::string> argv{rig.string(), "--scenario", scenario.string(), "--write-configs",
+                                (dir / "config").string()};
+  const std::vector<std::string> on_link = link.rig_options();
+  argv.insert(argv.end(), on_link.begin(), on_link.end());
+  // sensor_node's GVSP packets fit the link's MTU.
+  if (!on_link.empty())
+    argv.insert(argv.end(), {"--camera-packet-size", std::to_string(s.link_mtu)});
+  run_checked("rig --write-configs", argv, dir / "logs" / "rig.log");
   if (s.realtime_priority > 0) {
     for (const char* f : {"sensor_node.yaml", "hand_node.yaml"}) {
       std::ofstream out(dir / "config" / f, std::ios::app);
@@ -748,12 +840,24 @@ void read_rig_report(const fs::path& report, const fs::path& log_path, PipelineR
 class PipelineProcesses {
  public:
   PipelineProcesses(const Settings& s, const Programs& prog, const fs::path& scenario,
-                    const std::string& roi, const fs::path& dir)
+                    const std::string& roi, const CameraLink& link, const fs::path& dir)
       : dir_(dir),
         report_(dir / "report.json"),
         rig_("rig",
-             {prog.rig.string(), "--scenario", scenario.string(), "--report", report_.string(),
-              "--wait-for-hand", fmt::format("{}", s.start_timeout_s), "--log-level", "debug"},
+             [&] {
+               std::vector<std::string> argv{prog.rig.string(),
+                                             "--scenario",
+                                             scenario.string(),
+                                             "--report",
+                                             report_.string(),
+                                             "--wait-for-hand",
+                                             fmt::format("{}", s.start_timeout_s),
+                                             "--log-level",
+                                             "debug"};
+               const std::vector<std::string> on_link = link.rig_options();
+               argv.insert(argv.end(), on_link.begin(), on_link.end());
+               return argv;
+             }(),
              dir / "logs" / "rig.log"),
         sensor_("sensor_node",
                 {prog.sensor.string(), "--config", (dir / "config" / "sensor_node.yaml").string(),
@@ -1143,7 +1247,8 @@ PipelineResult run_pipeline(const Settings& s, double fps, const std::string& ro
   fs::create_directories(dir / "config");
   fs::create_directories(dir / "logs");
   const Programs prog = find_programs(s);
-  const fs::path scenario = write_configs(s, fps, dir, prog.rig);
+  CameraLink link(s, dir / "logs" / "camera-link.log");
+  const fs::path scenario = write_configs(s, fps, dir, prog.rig, link);
 
   // Declared before the context: the context's I/O thread starts under it, and ends before it.
   const IdleScheduling idle(s.idle_subscriber);
@@ -1158,7 +1263,7 @@ PipelineResult run_pipeline(const Settings& s, double fps, const std::string& ro
   cap.reserve(static_cast<std::size_t>(fps * 4 * (s.seconds + s.warmup_s + 30)));
 
   r.load_at_start = load_average();
-  PipelineProcesses procs(s, prog, scenario, roi, dir);
+  PipelineProcesses procs(s, prog, scenario, roi, link, dir);
   progress(fmt::format(
       "{:.0f} fps, roi {}: rig, sensor_node and hand_node started; waiting for the task", fps,
       roi));
@@ -1180,6 +1285,7 @@ PipelineResult run_pipeline(const Settings& s, double fps, const std::string& ro
         fmt::format("{:.0f} fps: the task ended after {:.1f} s of the window", fps, r.window_s));
   }
   procs.stop(fps, r);
+  r.link = link.stop();
 
   // Decode after the run: nothing but copying competes with the programs while they run.
   Decoded d = decode_captured(cap, w, r);
@@ -1206,6 +1312,8 @@ struct AravisResult {
   double receiver_cpu = std::nan("");  // this process (the two receivers), % of one core
   double rig_cpu = std::nan("");
   std::array<Region, 2> regions{};  // what each receiver set (width 0: whole frames)
+  std::size_t frame_bytes = 0;       // image bytes of a whole frame received (the region's)
+  LinkCounters link;                 // the cameras' link over the run (shaped links only)
 };
 
 // The rig alone serves its two fake cameras (the same images, rate and timestamps as in the
@@ -1222,11 +1330,18 @@ AravisResult run_aravis(const Settings& s, double fps, const std::string& roi,
   const int width = sc["camera"]["width"].as<int>(640);
   const int height = sc["camera"]["height"].as<int>(480);
   const int depth = sc["camera"]["bit_depth"].as<int>(8);
-  Child rig_p("rig",
-              {rig.string(), "--scenario", scenario.string(), "--wait-for-hand",
-               fmt::format("{}", budget), "--report", (dir / "transport-rig.json").string()},
-              dir / "logs" / "transport-rig.log");
-  for (const char* address : kCameraAddresses) {
+  CameraLink link(s, dir / "logs" / "transport-camera-link.log");
+  std::vector<std::string> rig_argv{rig.string(),
+                                    "--scenario",
+                                    scenario.string(),
+                                    "--wait-for-hand",
+                                    fmt::format("{}", budget),
+                                    "--report",
+                                    (dir / "transport-rig.json").string()};
+  const std::vector<std::string> on_link = link.rig_options();
+  rig_argv.insert(rig_argv.end(), on_link.begin(), on_link.end());
+  Child rig_p("rig", rig_argv, dir / "logs" / "transport-rig.log");
+  for (const std::string& address : link.cameras()) {
     const std::int64_t deadline = util::monotonic_ns() + 30'000'000'000;
     while (!camera::gvcp_device_answers(address, milliseconds(200))) {
       if (!rig_p.running() || util::monotonic_ns() > deadline)
@@ -1241,7 +1356,8 @@ AravisResult run_aravis(const Settings& s, double fps, const std::string& roi,
   constexpr const char* kCalibrations[2] = {"left.yaml", "right.yaml"};
   for (std::size_t c = 0; c < 2; ++c) {
     camera::AravisCameraOptions o;
-    o.camera = kCameraAddresses[c];
+    o.camera = link.cameras()[c];
+    if (!on_link.empty()) o.packet_size_bytes = s.link_mtu;
     o.width = width;
     o.height = height;
     o.pixel_format = depth == 16 ? PixelFormat::kMono16 : PixelFormat::kMono8;
@@ -1271,6 +1387,9 @@ AravisResult run_aravis(const Settings& s, double fps, const std::string& roi,
           counts[c].lost += f.frames_lost;
           if (f.status != camera::FrameStatus::kComplete) continue;
           ++counts[c].complete;
+          counts[c].frame_bytes = static_cast<std::size_t>(f.image.width) *
+                                  static_cast<std::size_t>(f.image.height) *
+                                  (f.image.format == PixelFormat::kMono16 ? 2U : 1U);
           lat[c].push_back(static_cast<double>(f.receive_timestamp_ns - f.camera_timestamp_ns) *
                            1e-6);
           lat_ns[c].emplace_back(f.camera_timestamp_ns, f.receive_timestamp_ns);
@@ -1295,6 +1414,8 @@ AravisResult run_aravis(const Settings& s, double fps, const std::string& roi,
     rc->stop();
   receivers.clear();
   rig_p.stop(milliseconds(10000));
+  r.link = link.stop();
+  r.frame_bytes = std::max(counts[0].frame_bytes, counts[1].frame_bytes);
   std::vector<double> both = lat[0];
   both.insert(both.end(), lat[1].begin(), lat[1].end());
   r.latency = dist(both);
@@ -1456,11 +1577,44 @@ double transport_alone_per_frame_p50(const RateResult& rr) {
   return rr.aravis->latency.p50 + rr.zmq->round_trip.p50;
 }
 
+// The link's rate in bit/s from tc's form (1gbit, 500mbit, 100kbit).
+double rate_bps(const std::string& rate) {
+  const std::smatch m = [&] {
+    std::smatch x;
+    std::regex_match(rate, x, std::regex("([1-9][0-9]*)(kbit|mbit|gbit)"));
+    return x;
+  }();
+  if (m.empty()) return std::nan("");
+  const double unit = m[2] == "kbit" ? 1e3 : m[2] == "mbit" ? 1e6 : 1e9;
+  return std::stod(m[1]) * unit;
+}
+
+// The time a frame of `image_bytes` takes on the link: its GVSP data packets of `packet_size`
+// bytes (IPv4 20, UDP 8 and GVSP 8 of each are headers), each with 38 bytes of Ethernet around
+// it (header 14, FCS 4, preamble 8, inter-frame gap 12), and a leader and a trailer (about 48
+// bytes of payload each) - the arithmetic of bench/system/gige_link_report.py. In ms.
+double wire_time_ms(std::size_t image_bytes, int packet_size, double bps) {
+  constexpr double kHeaders = 36, kEthernet = 38, kLeaderTrailer = 2 * (36 + 48 + 38);
+  const double per_packet = packet_size - kHeaders;
+  const double packets = std::ceil(static_cast<double>(image_bytes) / per_packet);
+  const double bytes =
+      static_cast<double>(image_bytes) + packets * (kHeaders + kEthernet) + kLeaderTrailer;
+  return bytes * 8.0 / bps * 1e3;
+}
+
 // The transport a decision waits for, p50: an exposure's two frames through Aravis (the later of
 // the two), then ZeroMQ's PUB -> SUB to hand_node. NaN when either was not measured.
 double transport_to_decision_p50(const RateResult& rr) {
   if (!rr.aravis || !rr.zmq) return std::nan("");
   return rr.aravis->latency_pair.p50 + rr.zmq->pub_sub.p50;
+}
+
+json link_json(const LinkCounters& c) {
+  if (!c.known) return nullptr;
+  return {{"bytes", c.bytes},
+          {"packets", c.packets},
+          {"dropped", c.dropped},
+          {"overlimits", c.overlimits}};
 }
 
 json result_json(const RateResult& rr) {
@@ -1524,6 +1678,7 @@ json result_json(const RateResult& rr) {
   j["events"] = p.events;
   j["rig_report"] = p.report;
   j["rig_counters"] = p.rig_counters;
+  j["camera_link"] = link_json(p.link);
   if (rr.aravis) {
     const AravisResult& a = *rr.aravis;
     j["transport"]["aravis_receive"] = to_json(a.latency);
@@ -1534,6 +1689,8 @@ json result_json(const RateResult& rr) {
         {"received", a.frames}, {"complete", a.complete}, {"lost", a.lost}};
     j["transport"]["aravis_receiver_cpu_percent"] = a.receiver_cpu;
     j["transport"]["aravis_rig_cpu_percent"] = a.rig_cpu;
+    j["transport"]["aravis_frame_image_bytes"] = a.frame_bytes;
+    j["transport"]["camera_link"] = link_json(a.link);
     for (const Region& g : a.regions) {
       j["transport"]["aravis_regions"].push_back(
           g.width > 0 ? json{{"x", g.x}, {"y", g.y}, {"width", g.width}, {"height", g.height}}
@@ -1728,6 +1885,36 @@ void print_decisions_table(const std::vector<RateResult>& rs, const Settings& s)
   }
 }
 
+// The cameras' link (shaped links only): what a frame takes on it and what the runs put through.
+void print_link_table(const std::vector<RateResult>& rs, const Settings& s) {
+  if (s.camera_link == "loopback") return;
+  const bool shared = s.camera_link == "shared";
+  std::printf(
+      "\nCamera link: %s (%s), %s, MTU %d, tbf burst %d bytes, queue 1,000,000 bytes:\n\n"
+      "| fps | frame (image bytes) | wire time of a frame, ms | of the two an exposure waits "
+      "for | link load needed | pipeline: packets, dropped, over the rate | transport alone: "
+      "packets, dropped, over the rate |\n|---|---|---|---|---|---|---|\n",
+      s.camera_link.c_str(), shared ? "both cameras on one link" : "one link per camera",
+      s.link_rate.c_str(), s.link_mtu, 2 * s.link_mtu + 200);
+  for (const RateResult& rr : rs) {
+    const std::size_t bytes = rr.aravis ? rr.aravis->frame_bytes : 0;
+    const double wire = bytes > 0 ? wire_time_ms(bytes, s.link_mtu, rate_bps(s.link_rate))
+                                  : std::nan("");
+    // On a shared link the later of an exposure's two frames waits for both.
+    const double pair = shared ? 2 * wire : wire;
+    const double load = wire * 1e-3 * rr.pipe.fps * (shared ? 2 : 1);
+    const auto counters = [](const LinkCounters& c) {
+      return c.known ? fmt::format("{}, {}, {}", c.packets, c.dropped, c.overlimits)
+                     : std::string("-");
+    };
+    std::printf("| %s | %zu | %s | %s | %s | %s | %s |\n", row_label(rr, s).c_str(), bytes,
+                ms(wire, 2).c_str(), ms(pair, 2).c_str(),
+                std::isfinite(load) ? fmt::format("{:.0f} %", load * 100).c_str() : "-",
+                counters(rr.pipe.link).c_str(),
+                rr.aravis ? counters(rr.aravis->link).c_str() : "-");
+  }
+}
+
 // The transport alone: Aravis receive and the ZeroMQ hops.
 void print_transport_table(const std::vector<RateResult>& rs, const Settings& s) {
   std::printf(
@@ -1879,6 +2066,7 @@ void print_tables(const std::vector<RateResult>& rs, const Settings& s) {
   print_frames_table(rs, s);
   print_stages_table(rs, s);
   print_decisions_table(rs, s);
+  print_link_table(rs, s);
   print_transport_table(rs, s);
   print_slip_table(rs, s);
   print_timestamp_warnings(rs, s);
@@ -1942,6 +2130,9 @@ int run(const Settings& s, const fs::path& self) {
                      {"runs", s.runs},
                      {"rois", s.rois},
                      {"realtime_priority", s.realtime_priority},
+                     {"camera_link", s.camera_link},
+                     {"link_rate", s.link_rate},
+                     {"link_mtu", s.link_mtu},
                      {"scenario", s.scenario.string()}};
   for (const double fps : s.rates) {
     for (int run = 1; run <= s.runs; ++run) {
@@ -2047,6 +2238,23 @@ int main(int argc, char** argv) {
                  "transport alone receives the same region")
       ->delimiter(',')
       ->check(CLI::IsMember({"auto", "full"}))
+      ->capture_default_str();
+  app.add_option("--camera-link", s.camera_link,
+                 "the cameras' link (scripts/camera-link): loopback (beside the nodes, unshaped), "
+                 "shared (both cameras behind one veth pair shaped to --link-rate) or separate "
+                 "(one each); the transport alone runs on the same link")
+      ->check(CLI::IsMember({"loopback", "shared", "separate"}))
+      ->capture_default_str();
+  app.add_option("--link-rate", s.link_rate, "the shaped link's rate, in tc's form")
+      ->check([](const std::string& v) {
+        return std::isfinite(tactile::bench::rate_bps(v))
+                   ? std::string()
+                   : "give tc's form, e.g. 1gbit or 500mbit, not '" + v + "'";
+      })
+      ->capture_default_str();
+  app.add_option("--link-mtu", s.link_mtu,
+                 "the shaped link's MTU, and the GVSP packet size of sensor_node and the receivers")
+      ->check(CLI::IsMember({1500, 9000}))
       ->capture_default_str();
   app.add_flag("!--no-plot", s.plot, "do not write latency.png");
   app.add_flag("--skip-transport", s.skip_transport, "only the pipeline, not the transport alone");
