@@ -591,11 +591,9 @@ class CameraLink {
   CameraLink(const Settings& s, const fs::path& log) : log_(log) {
     if (s.camera_link == "loopback") return;
     child_.emplace("camera-link",
-                   std::vector<std::string>{"/bin/bash",
-                                            (fs::path(TACTILE_SOURCE_DIR) / "scripts/camera-link")
-                                                .string(),
-                                            s.camera_link, "--rate", s.link_rate, "--mtu",
-                                            std::to_string(s.link_mtu)},
+                   std::vector<std::string>{
+                       "/bin/bash", (fs::path(TACTILE_SOURCE_DIR) / "scripts/camera-link").string(),
+                       s.camera_link, "--rate", s.link_rate, "--mtu", std::to_string(s.link_mtu)},
                    log);
     // Its first line: "cameras A,B netns NS links N".
     const std::int64_t deadline = util::monotonic_ns() + 20'000'000'000;
@@ -843,22 +841,23 @@ class PipelineProcesses {
                     const std::string& roi, const CameraLink& link, const fs::path& dir)
       : dir_(dir),
         report_(dir / "report.json"),
-        rig_("rig",
-             [&] {
-               std::vector<std::string> argv{prog.rig.string(),
-                                             "--scenario",
-                                             scenario.string(),
-                                             "--report",
-                                             report_.string(),
-                                             "--wait-for-hand",
-                                             fmt::format("{}", s.start_timeout_s),
-                                             "--log-level",
-                                             "debug"};
-               const std::vector<std::string> on_link = link.rig_options();
-               argv.insert(argv.end(), on_link.begin(), on_link.end());
-               return argv;
-             }(),
-             dir / "logs" / "rig.log"),
+        rig_(
+            "rig",
+            [&] {
+              std::vector<std::string> argv{prog.rig.string(),
+                                            "--scenario",
+                                            scenario.string(),
+                                            "--report",
+                                            report_.string(),
+                                            "--wait-for-hand",
+                                            fmt::format("{}", s.start_timeout_s),
+                                            "--log-level",
+                                            "debug"};
+              const std::vector<std::string> on_link = link.rig_options();
+              argv.insert(argv.end(), on_link.begin(), on_link.end());
+              return argv;
+            }(),
+            dir / "logs" / "rig.log"),
         sensor_("sensor_node",
                 {prog.sensor.string(), "--config", (dir / "config" / "sensor_node.yaml").string(),
                  "--roi", roi},
@@ -1255,10 +1254,10 @@ PipelineResult run_pipeline(const Settings& s, double fps, const std::string& ro
   r.subscriber_idle = idle.active();
   zmq::context_t ctx;
   // Everything the programs publish that the stages need; the rig's truth for slip onsets.
-  wire::Subscriber sub(
-      ctx, {"tcp://127.0.0.1:5555", "tcp://127.0.0.1:5557", "tcp://127.0.0.1:5558"},
-      {wire::kFrameTopicPrefix, wire::kTruthTopic, wire::kEventTopic, wire::kCommandTopic,
-       wire::kDecisionTopic});
+  wire::Subscriber sub(ctx,
+                       {"tcp://127.0.0.1:5555", "tcp://127.0.0.1:5557", "tcp://127.0.0.1:5558"},
+                       {wire::kFrameTopicPrefix, wire::kTruthTopic, wire::kEventTopic,
+                        wire::kCommandTopic, wire::kDecisionTopic});
   std::vector<Captured> cap;
   cap.reserve(static_cast<std::size_t>(fps * 4 * (s.seconds + s.warmup_s + 30)));
 
@@ -1312,8 +1311,8 @@ struct AravisResult {
   double receiver_cpu = std::nan("");  // this process (the two receivers), % of one core
   double rig_cpu = std::nan("");
   std::array<Region, 2> regions{};  // what each receiver set (width 0: whole frames)
-  std::size_t frame_bytes = 0;       // image bytes of a whole frame received (the region's)
-  LinkCounters link;                 // the cameras' link over the run (shaped links only)
+  std::size_t frame_bytes = 0;      // image bytes of a whole frame received (the region's)
+  LinkCounters link;                // the cameras' link over the run (shaped links only)
 };
 
 // The rig alone serves its two fake cameras (the same images, rate and timestamps as in the
@@ -1874,14 +1873,13 @@ void print_decisions_table(const std::vector<RateResult>& rs, const Settings& s)
   for (const RateResult& rr : rs) {
     const PipelineResult& p = rr.pipe;
     const double t = transport_to_decision_p50(rr);
-    std::printf("| %s | %zu | %llu | %s / %s / %s | %s / %s | %s | %s | %s |\n",
-                row_label(rr, s).c_str(), p.cam_to_decision.n,
-                static_cast<unsigned long long>(p.frames_without_decision),
-                ms(p.cam_to_decision.p50).c_str(), ms(p.cam_to_decision.p99).c_str(),
-                ms(p.cam_to_decision.max).c_str(), ms(p.receive_to_decision.p50).c_str(),
-                ms(p.receive_to_decision.p99).c_str(), ms(t).c_str(),
-                ms(p.cam_to_decision.p50 - t).c_str(),
-                std::isfinite(t) ? fmt::format("{:.2f}", p.cam_to_decision.p50 / t).c_str() : "-");
+    std::printf(
+        "| %s | %zu | %llu | %s / %s / %s | %s / %s | %s | %s | %s |\n", row_label(rr, s).c_str(),
+        p.cam_to_decision.n, static_cast<unsigned long long>(p.frames_without_decision),
+        ms(p.cam_to_decision.p50).c_str(), ms(p.cam_to_decision.p99).c_str(),
+        ms(p.cam_to_decision.max).c_str(), ms(p.receive_to_decision.p50).c_str(),
+        ms(p.receive_to_decision.p99).c_str(), ms(t).c_str(), ms(p.cam_to_decision.p50 - t).c_str(),
+        std::isfinite(t) ? fmt::format("{:.2f}", p.cam_to_decision.p50 / t).c_str() : "-");
   }
 }
 
@@ -1898,8 +1896,8 @@ void print_link_table(const std::vector<RateResult>& rs, const Settings& s) {
       s.link_rate.c_str(), s.link_mtu, 2 * s.link_mtu + 200);
   for (const RateResult& rr : rs) {
     const std::size_t bytes = rr.aravis ? rr.aravis->frame_bytes : 0;
-    const double wire = bytes > 0 ? wire_time_ms(bytes, s.link_mtu, rate_bps(s.link_rate))
-                                  : std::nan("");
+    const double wire =
+        bytes > 0 ? wire_time_ms(bytes, s.link_mtu, rate_bps(s.link_rate)) : std::nan("");
     // On a shared link the later of an exposure's two frames waits for both.
     const double pair = shared ? 2 * wire : wire;
     const double load = wire * 1e-3 * rr.pipe.fps * (shared ? 2 : 1);
