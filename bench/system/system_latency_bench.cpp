@@ -16,11 +16,15 @@
 // sensor_node sets from the calibrations (its default), and `full`, whole frames; the transport
 // alone receives the same region as the pipeline beside it, so the two are compared like for like.
 // Prints a table, writes OUT/latency.json and OUT/latency.png; progress on standard error.
+#include <arpa/inet.h>
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <netinet/in.h>
 #include <sched.h>
 #include <signal.h>
 #include <sys/prctl.h>
+#include <sys/socket.h>
+#include <sys/time.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -511,6 +515,7 @@ struct LinkCounters {
   std::uint64_t packets = 0;
   std::uint64_t dropped = 0;
   std::uint64_t overlimits = 0;  // packets the bucket held back (over the rate)
+  int burst = 0;                 // the bucket's burst, bytes
   bool known = false;
 };
 
@@ -601,11 +606,13 @@ class CameraLink {
       std::ifstream in(log);
       for (std::string line; std::getline(in, line);) {
         std::istringstream words(line);
-        std::string c, cameras, n, netns;
-        if (words >> c >> cameras >> n >> netns && c == "cameras" && n == "netns") {
+        std::string c, cameras, n, netns, l, links, o, nodes, b;
+        if (words >> c >> cameras >> n >> netns >> l >> links >> o >> nodes >> b >> burst_ &&
+            c == "cameras" && n == "netns" && o == "nodes" && b == "burst") {
           const auto comma = cameras.find(',');
           cameras_ = {cameras.substr(0, comma), cameras.substr(comma + 1)};
           netns_ = netns;
+          node_ = nodes.substr(0, nodes.find(','));
           return;
         }
       }
@@ -620,6 +627,12 @@ class CameraLink {
   CameraLink& operator=(const CameraLink&) = delete;
 
   const std::array<std::string, 2>& cameras() const { return cameras_; }
+  bool shaped() const { return child_.has_value(); }
+  const std::string& netns() const { return netns_; }
+  // The nodes' end of the (first) link.
+  const std::string& node_address() const { return node_; }
+  // The token bucket's burst, bytes.
+  int burst() const { return burst_; }
   // rig's options for it (none on loopback, where its cameras are where they always are).
   std::vector<std::string> rig_options() const {
     if (!child_) return {};
@@ -630,6 +643,7 @@ class CameraLink {
   LinkCounters stop() {
     LinkCounters c;
     if (!child_) return c;
+    c.burst = burst_;
     child_->stop(milliseconds(5000));
     std::ifstream in(log_);
     const std::regex re(
@@ -651,7 +665,101 @@ class CameraLink {
   std::optional<Child> child_;
   std::array<std::string, 2> cameras_{kCameraAddresses[0], kCameraAddresses[1]};
   std::string netns_;
+  std::string node_;
+  int burst_ = 0;
 };
+
+// The link alone: `bursts` times, the UDP datagrams of `packets` GVSP packets of the link's MTU
+// (one exposure's: both frames on a shared link, one on a link of its own) sent at once with
+// sendmmsg from the cameras' namespace to the nodes' end of the (first) link, 20 ms apart; the
+// time from each burst's send to its last datagram received, over the bursts that arrived whole.
+// What the emulated wire itself takes, to set beside the frame's computed wire time.
+Dist probe_link(const CameraLink& link, int mtu, std::size_t packets, int bursts) {
+  if (!link.shaped() || packets == 0) return {};
+  const auto fail = [](const std::string& what) {
+    return std::runtime_error(fmt::format("link probe: {}: {}", what, std::strerror(errno)));
+  };
+  const int rx = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (rx < 0) throw fail("socket");
+  sockaddr_in at{};
+  at.sin_family = AF_INET;
+  ::inet_pton(AF_INET, link.node_address().c_str(), &at.sin_addr);
+  const int big = 16 << 20;
+  ::setsockopt(rx, SOL_SOCKET, SO_RCVBUF, &big, sizeof big);
+  const timeval tv{0, 200'000};
+  ::setsockopt(rx, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  socklen_t len = sizeof at;
+  if (::bind(rx, reinterpret_cast<sockaddr*>(&at), sizeof at) != 0 ||
+      ::getsockname(rx, reinterpret_cast<sockaddr*>(&at), &len) != 0) {
+    ::close(rx);
+    throw fail("bind " + link.node_address());
+  }
+  int tx = -1;
+  camera::run_in_network_namespace(link.netns(),
+                                   [&] { tx = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0); });
+  if (tx < 0) {
+    ::close(rx);
+    throw fail("socket in the cameras' namespace");
+  }
+  ::setsockopt(tx, SOL_SOCKET, SO_SNDBUF, &big, sizeof big);
+  struct Header {
+    std::uint32_t burst;
+    std::int64_t sent_ns;
+  };
+  const std::size_t size = static_cast<std::size_t>(mtu) - 28;  // IPv4 20, UDP 8
+  std::vector<std::vector<char>> payload(packets, std::vector<char>(size));
+  std::vector<iovec> iov(packets);
+  std::vector<mmsghdr> msgs(packets);
+  std::jthread sender([&] {
+    for (int b = 0; b < bursts && !util::stop_requested(); ++b) {
+      const Header h{static_cast<std::uint32_t>(b), util::realtime_ns()};
+      for (std::size_t i = 0; i < packets; ++i) {
+        std::memcpy(payload[i].data(), &h, sizeof h);
+        iov[i] = {payload[i].data(), size};
+        msgs[i] = {};
+        msgs[i].msg_hdr.msg_iov = &iov[i];
+        msgs[i].msg_hdr.msg_iovlen = 1;
+        msgs[i].msg_hdr.msg_name = &at;
+        msgs[i].msg_hdr.msg_namelen = sizeof at;
+      }
+      for (std::size_t sent = 0; sent < packets;) {
+        const int k = ::sendmmsg(tx, msgs.data() + sent, static_cast<unsigned>(packets - sent), 0);
+        if (k <= 0) return;
+        sent += static_cast<std::size_t>(k);
+      }
+      std::this_thread::sleep_for(milliseconds(20));
+    }
+  });
+  std::vector<double> whole;
+  std::uint32_t current = ~0U;
+  std::size_t count = 0;
+  std::int64_t sent_ns = 0, last_ns = 0;
+  const auto close_burst = [&] {
+    if (current != ~0U && count == packets)
+      whole.push_back(static_cast<double>(last_ns - sent_ns) * 1e-6);
+  };
+  std::vector<char> buf(static_cast<std::size_t>(mtu));
+  for (;;) {
+    const ssize_t k = ::recv(rx, buf.data(), buf.size(), 0);
+    if (k < static_cast<ssize_t>(sizeof(Header))) break;  // 200 ms of silence: the last burst is in
+    const std::int64_t now = util::realtime_ns();
+    Header h{};
+    std::memcpy(&h, buf.data(), sizeof h);
+    if (h.burst != current) {
+      close_burst();
+      current = h.burst;
+      count = 0;
+      sent_ns = h.sent_ns;
+    }
+    ++count;
+    last_ns = now;
+  }
+  close_burst();
+  sender.join();
+  ::close(tx);
+  ::close(rx);
+  return dist(whole);
+}
 
 fs::path program(const Settings& s, const char* rel) {
   const fs::path p = s.build_dir / rel;
@@ -1313,6 +1421,9 @@ struct AravisResult {
   std::array<Region, 2> regions{};  // what each receiver set (width 0: whole frames)
   std::size_t frame_bytes = 0;      // image bytes of a whole frame received (the region's)
   LinkCounters link;                // the cameras' link over the run (shaped links only)
+  // The link alone (probe_link, on a link of its own after the run): one exposure's packets.
+  Dist link_alone;
+  std::size_t link_alone_packets = 0;
 };
 
 // The rig alone serves its two fake cameras (the same images, rate and timestamps as in the
@@ -1415,6 +1526,16 @@ AravisResult run_aravis(const Settings& s, double fps, const std::string& roi,
   rig_p.stop(milliseconds(10000));
   r.link = link.stop();
   r.frame_bytes = std::max(counts[0].frame_bytes, counts[1].frame_bytes);
+  if (s.camera_link != "loopback" && r.frame_bytes > 0) {
+    // The packets of one exposure on a link: its frame's (or both frames' on a shared link), a
+    // leader and a trailer each, sent through a fresh link so its counters stay the run's.
+    const std::size_t per_packet = static_cast<std::size_t>(s.link_mtu) - 36;
+    const std::size_t per_frame = (r.frame_bytes + per_packet - 1) / per_packet + 2;
+    r.link_alone_packets = per_frame * (s.camera_link == "shared" ? 2 : 1);
+    CameraLink alone(s, dir / "logs" / "link-alone-camera-link.log");
+    r.link_alone = probe_link(alone, s.link_mtu, r.link_alone_packets, 200);
+    alone.stop();
+  }
   std::vector<double> both = lat[0];
   both.insert(both.end(), lat[1].begin(), lat[1].end());
   r.latency = dist(both);
@@ -1610,7 +1731,8 @@ double transport_to_decision_p50(const RateResult& rr) {
 
 json link_json(const LinkCounters& c) {
   if (!c.known) return nullptr;
-  return {{"bytes", c.bytes},
+  return {{"burst", c.burst},
+          {"bytes", c.bytes},
           {"packets", c.packets},
           {"dropped", c.dropped},
           {"overlimits", c.overlimits}};
@@ -1690,6 +1812,8 @@ json result_json(const RateResult& rr) {
     j["transport"]["aravis_rig_cpu_percent"] = a.rig_cpu;
     j["transport"]["aravis_frame_image_bytes"] = a.frame_bytes;
     j["transport"]["camera_link"] = link_json(a.link);
+    j["link_alone"] = {{"packets", a.link_alone_packets},
+                       {"send_to_last_received", to_json(a.link_alone)}};
     for (const Region& g : a.regions) {
       j["transport"]["aravis_regions"].push_back(
           g.width > 0 ? json{{"x", g.x}, {"y", g.y}, {"width", g.width}, {"height", g.height}}
@@ -1883,17 +2007,22 @@ void print_decisions_table(const std::vector<RateResult>& rs, const Settings& s)
   }
 }
 
+const char* verdict(bool measured, bool ok) {
+  return !measured ? "not measured" : ok ? "met" : "NOT met";
+}
+
 // The cameras' link (shaped links only): what a frame takes on it and what the runs put through.
 void print_link_table(const std::vector<RateResult>& rs, const Settings& s) {
   if (s.camera_link == "loopback") return;
   const bool shared = s.camera_link == "shared";
   std::printf(
       "\nCamera link: %s (%s), %s, MTU %d, tbf burst %d bytes, queue 1,000,000 bytes:\n\n"
-      "| fps | frame (image bytes) | wire time of a frame, ms | of the two an exposure waits "
-      "for | link load needed | pipeline: packets, dropped, over the rate | transport alone: "
-      "packets, dropped, over the rate |\n|---|---|---|---|---|---|---|\n",
+      "| fps | frame (image bytes) | wire time of a frame, ms | what an exposure waits for "
+      "(computed) | the link alone: an exposure's packets, send -> last received p50 / p99 | "
+      "link load needed | pipeline: packets, dropped, over the rate | transport alone: packets, "
+      "dropped, over the rate |\n|---|---|---|---|---|---|---|---|\n",
       s.camera_link.c_str(), shared ? "both cameras on one link" : "one link per camera",
-      s.link_rate.c_str(), s.link_mtu, 2 * s.link_mtu + 200);
+      s.link_rate.c_str(), s.link_mtu, rs.empty() ? 0 : rs.front().pipe.link.burst);
   for (const RateResult& rr : rs) {
     const std::size_t bytes = rr.aravis ? rr.aravis->frame_bytes : 0;
     const double wire =
@@ -1905,11 +2034,42 @@ void print_link_table(const std::vector<RateResult>& rs, const Settings& s) {
       return c.known ? fmt::format("{}, {}, {}", c.packets, c.dropped, c.overlimits)
                      : std::string("-");
     };
-    std::printf("| %s | %zu | %s | %s | %s | %s | %s |\n", row_label(rr, s).c_str(), bytes,
+    const Dist alone = rr.aravis ? rr.aravis->link_alone : Dist{};
+    std::printf("| %s | %zu | %s | %s | %s | %s | %s | %s |\n", row_label(rr, s).c_str(), bytes,
                 ms(wire, 2).c_str(), ms(pair, 2).c_str(),
+                alone.n > 0 ? fmt::format("{} packets: {} / {}", rr.aravis->link_alone_packets,
+                                          ms(alone.p50, 2), ms(alone.p99, 2))
+                                  .c_str()
+                            : "-",
                 std::isfinite(load) ? fmt::format("{:.0f} %", load * 100).c_str() : "-",
                 counters(rr.pipe.link).c_str(),
                 rr.aravis ? counters(rr.aravis->link).c_str() : "-");
+  }
+  // Issue 21's targets: on a shared link, exposure -> command p99 at most the wire time of the
+  // two frames the command waits for + 0.5 ms; on a link each, p50 at most one frame's + 0.3 ms.
+  std::printf(
+      "\nTargets on the link (%s): %s\n\n| fps | bound, ms | exposure -> command (rig, "
+      "answers) p50 / p99 | exposure -> decision (every frame) p50 / p99 | transport alone to a "
+      "decision p50 | the link alone p50 | verdict (command / decision) |\n"
+      "|---|---|---|---|---|---|---|\n",
+      s.camera_link.c_str(),
+      shared ? "p99 <= wire time of the two frames + 0.5 ms"
+             : "p50 <= wire time of the frame + 0.3 ms");
+  for (const RateResult& rr : rs) {
+    const std::size_t bytes = rr.aravis ? rr.aravis->frame_bytes : 0;
+    const double wire =
+        bytes > 0 ? wire_time_ms(bytes, s.link_mtu, rate_bps(s.link_rate)) : std::nan("");
+    const double bound = shared ? 2 * wire + 0.5 : wire + 0.3;
+    const PipelineResult& p = rr.pipe;
+    const double cmd = shared ? p.e2e.p99 : p.e2e.p50;
+    const double dec = shared ? p.cam_to_decision.p99 : p.cam_to_decision.p50;
+    std::printf("| %s | %s | %s / %s | %s / %s | %s | %s | %s / %s |\n", row_label(rr, s).c_str(),
+                ms(bound, 2).c_str(), ms(p.e2e.p50).c_str(), ms(p.e2e.p99).c_str(),
+                ms(p.cam_to_decision.p50).c_str(), ms(p.cam_to_decision.p99).c_str(),
+                ms(transport_to_decision_p50(rr)).c_str(),
+                rr.aravis ? ms(rr.aravis->link_alone.p50).c_str() : "-",
+                verdict(std::isfinite(cmd) && std::isfinite(bound), cmd <= bound),
+                verdict(std::isfinite(dec) && std::isfinite(bound), dec <= bound));
   }
 }
 
@@ -2019,9 +2179,6 @@ void print_machine_notes(const std::vector<RateResult>& rs, const Settings& s) {
 // The targets, judged on one 200 fps run.
 void print_targets(const RateResult& rr, const Settings& s) {
   const PipelineResult& p = rr.pipe;
-  const auto verdict = [](bool measured, bool ok) {
-    return !measured ? "not measured" : ok ? "met" : "NOT met";
-  };
   std::printf(
       "\nTargets (two cameras, 200 fps, roi %s%s):\n\n| target | measured | verdict "
       "|\n|---|---|---|\n",
