@@ -95,10 +95,10 @@ struct Settings {
   // sensor_node and hand_node under SCHED_FIFO at this priority (their configurations' realtime
   // section), and the transport alone's receivers and echo likewise (FifoScheduling); 0: none.
   int realtime_priority = 0;
-  // The cameras' link (scripts/camera-link): "loopback" (127.0.0.2 and .3 beside the nodes), or
-  // "shared" (both behind one veth pair shaped to link_rate) or "separate" (a pair each), at MTU
-  // link_mtu (sensor_node's and the receivers' GVSP packet size).
-  std::string camera_link = "loopback";
+  // The cameras' link (scripts/camera-link): "separate" (a veth pair each, shaped to link_rate),
+  // "shared" (both behind one pair) or "loopback" (127.0.0.2 and .3 beside the nodes, unshaped),
+  // at MTU link_mtu (sensor_node's and the receivers' GVSP packet size).
+  std::string camera_link = "separate";
   std::string link_rate = "1gbit";
   int link_mtu = 1500;
 };
@@ -2358,8 +2358,9 @@ int main(int argc, char** argv) {
   s.scenario = fs::path(TACTILE_SOURCE_DIR) / "rig" / "scenarios" / "default.yaml";
   CLI::App app(
       "tactile_system_latency_bench: latency and load of the whole system (docs/benchmarks.md, "
-      "\"Latency and load\").\nFor each rate, with two cameras, in a private loopback network "
-      "namespace: the real rig (real time), sensor_node and hand_node as processes, then the "
+      "\"Latency and load\").\nFor each rate, with two cameras, in a private network namespace "
+      "(the cameras behind shaped links by default, --camera-link): the real rig (real time), "
+      "sensor_node and hand_node as processes, then the "
       "transport alone (the rig's fake GigE Vision cameras to a plain Aravis receiver; a ZeroMQ "
       "PUB/SUB + DEALER/ROUTER round trip). Prints tables, writes OUT/latency.json and "
       "OUT/latency.png, the programs' logs and configurations under OUT/<fps>fps/roi-<roi>/.");
