@@ -357,23 +357,18 @@ class HandNodeRun {
       if (tips.size() == 2) ++r.commands_naming_both_sensors;
       if (exposures.size() > 1) ++r.commands_answering_two_exposures;
     };
+    // Decisions come with every frame: kept as they came and read after the run, so this loop,
+    // which paces the frames, does no more per frame than before (under ASan it is slow enough).
+    std::vector<std::vector<std::uint8_t>> decisions;
     const auto on_published = [&] {
+      if (ev.topic == wire::kDecisionTopic) {
+        decisions.push_back(ev.payload);
+        return;
+      }
       if (wire::decode(ev.payload, env) != wire::DecodeStatus::kOk) return;
       if (env.has_event()) {
         r.events.push_back(env.event().kind());
         r.event_cycles.push_back(env.event().cycle());
-      } else if (env.has_decision()) {
-        const v1::Decision& d = env.decision();
-        ++r.decisions;
-        for (const v1::FrameRef& f : d.answers()) {
-          ++r.decided[{f.sensor_id(), f.sequence()}];
-          if (!published.count({f.sensor_id(), f.sequence()})) ++r.decisions_naming_unknown_frames;
-          if (f.receive_timestamp_ns() <= 0) ++r.decisions_without_receive_time;
-        }
-        if (std::any_of(d.fingertips().begin(), d.fingertips().end(),
-                        [](const v1::FingertipDecision& t) { return t.slip(); }))
-          ++r.decisions_with_slip;
-        if (d.command_sequence() > 0) r.decision_commands.insert(d.command_sequence());
       } else if (env.has_arm_command()) {
         on_command();
       } else if (env.has_arm_state()) {
@@ -441,6 +436,20 @@ class HandNodeRun {
     // Late events and commands (Stop on the way out).
     while (events.receive(ev, 50ms))
       on_published();
+    for (const auto& bytes : decisions) {
+      if (wire::decode(bytes, env) != wire::DecodeStatus::kOk || !env.has_decision()) continue;
+      const v1::Decision& d = env.decision();
+      ++r.decisions;
+      for (const v1::FrameRef& f : d.answers()) {
+        ++r.decided[{f.sensor_id(), f.sequence()}];
+        if (!published.count({f.sensor_id(), f.sequence()})) ++r.decisions_naming_unknown_frames;
+        if (f.receive_timestamp_ns() <= 0) ++r.decisions_without_receive_time;
+      }
+      if (std::any_of(d.fingertips().begin(), d.fingertips().end(),
+                      [](const v1::FingertipDecision& t) { return t.slip(); }))
+        ++r.decisions_with_slip;
+      if (d.command_sequence() > 0) r.decision_commands.insert(d.command_sequence());
+    }
     if (bridge) {
       bridge->signal(SIGTERM);
       r.bridge = bridge->wait(5s);
@@ -517,8 +526,15 @@ TEST(HandNode, RunsThePapersTaskAndEndsDone) {
   const RunResult r = run.run(paper_story, 40s);
   ASSERT_FALSE(r.process.timed_out) << r.process.err;
   EXPECT_EQ(r.process.exit_code, 0) << r.process.err;
-  const auto seq = without(r.events, {v1::EVENT_KIND_PHASE, v1::EVENT_KIND_TOUCH,
-                                      v1::EVENT_KIND_RECOMPRESS, v1::EVENT_KIND_TWIST_CYCLE});
+  // Frames this test published late (under ASan, on a loaded machine: one stop's CI saw a stale
+  // hold in a twist grasp) hold the arm until they are fresh again: each hold must be resumed,
+  // and the task's sequence is judged without them (HoldsOnStaleDataAndResumes tests the holds).
+  EXPECT_EQ(std::count(r.events.begin(), r.events.end(), v1::EVENT_KIND_STALE_HOLD),
+            std::count(r.events.begin(), r.events.end(), v1::EVENT_KIND_RESUMED))
+      << r.process.err;
+  const auto seq = without(
+      r.events, {v1::EVENT_KIND_PHASE, v1::EVENT_KIND_TOUCH, v1::EVENT_KIND_RECOMPRESS,
+                 v1::EVENT_KIND_TWIST_CYCLE, v1::EVENT_KIND_STALE_HOLD, v1::EVENT_KIND_RESUMED});
   const std::vector<v1::EventKind> want{
       v1::EVENT_KIND_GRASPING_ENDED, v1::EVENT_KIND_GRASP_CLASSIFIED,
       v1::EVENT_KIND_RELEASE_CLASSIFIED, v1::EVENT_KIND_CAP_TIGHT, v1::EVENT_KIND_DONE};
