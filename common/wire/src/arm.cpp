@@ -41,12 +41,18 @@ int fingertip_of(const std::string& sensor_id, const FingertipIds& ids) {
   return -1;
 }
 
+// Grows or shrinks `out` to `n` elements, keeping the ones it holds: no allocation once warm.
+template <typename T>
+void resize(google::protobuf::RepeatedPtrField<T>& out, std::size_t n) {
+  while (out.size() > static_cast<int>(n))
+    out.RemoveLast();
+  while (out.size() < static_cast<int>(n))
+    out.Add();
+}
+
 void fill_answers(const Answers& answers, const FingertipIds& ids,
                   google::protobuf::RepeatedPtrField<v1::FrameRef>& out) {
-  while (out.size() > static_cast<int>(answers.count))
-    out.RemoveLast();
-  while (out.size() < static_cast<int>(answers.count))
-    out.Add();
+  resize(out, answers.count);
   for (std::size_t i = 0; i < answers.count; ++i) {
     const FrameRef& r = answers.refs[i];
     v1::FrameRef& f = out[static_cast<int>(i)];
@@ -80,10 +86,7 @@ void fill_arm_command(const control::Command& c, std::uint64_t sequence, std::in
     }
     case control::CommandKind::kFingerVelocities: {
       auto* fingers = out.mutable_finger_velocities()->mutable_fingers();
-      while (fingers->size() > static_cast<int>(ids.size()))
-        fingers->RemoveLast();
-      while (fingers->size() < static_cast<int>(ids.size()))
-        fingers->Add();
+      resize(*fingers, ids.size());
       for (std::size_t i = 0; i < ids.size(); ++i) {
         v1::FingerVelocity& f = (*fingers)[static_cast<int>(i)];
         f.set_sensor_id(ids[i]);
@@ -176,10 +179,7 @@ void fill_arm_state(const ArmStateData& s, const FingertipIds& ids, v1::ArmState
   out.set_time_ns(s.time_ns);
   set_pose(s.wrist, *out.mutable_wrist());
   auto* tips = out.mutable_fingertips();
-  while (tips->size() > static_cast<int>(ids.size()))
-    tips->RemoveLast();
-  while (tips->size() < static_cast<int>(ids.size()))
-    tips->Add();
+  resize(*tips, ids.size());
   for (std::size_t i = 0; i < ids.size(); ++i) {
     v1::Fingertip& t = (*tips)[static_cast<int>(i)];
     t.set_sensor_id(ids[i]);
@@ -279,10 +279,7 @@ void fill_decision(const control::ControllerOutput& output, std::int64_t time_ns
   out.set_phase(control::to_string(output.phase));
   out.set_command_sequence(command_sequence);
   auto& tips = *out.mutable_fingertips();
-  while (tips.size() > static_cast<int>(ids.size()))
-    tips.RemoveLast();
-  while (tips.size() < static_cast<int>(ids.size()))
-    tips.Add();
+  resize(tips, ids.size());
   for (std::size_t i = 0; i < ids.size(); ++i) {
     const control::FingertipFlags& f = output.flags.fingertip[i];
     v1::FingertipDecision& d = tips[static_cast<int>(i)];
