@@ -1699,12 +1699,8 @@ double transport_alone_per_frame_p50(const RateResult& rr) {
 
 // The link's rate in bit/s from tc's form (1gbit, 500mbit, 100kbit).
 double rate_bps(const std::string& rate) {
-  const std::smatch m = [&] {
-    std::smatch x;
-    std::regex_match(rate, x, std::regex("([1-9][0-9]*)(kbit|mbit|gbit)"));
-    return x;
-  }();
-  if (m.empty()) return std::nan("");
+  std::smatch m;
+  if (!std::regex_match(rate, m, std::regex("([1-9][0-9]*)(kbit|mbit|gbit)"))) return std::nan("");
   const double unit = m[2] == "kbit" ? 1e3 : m[2] == "mbit" ? 1e6 : 1e9;
   return std::stod(m[1]) * unit;
 }
@@ -1720,6 +1716,13 @@ double wire_time_ms(std::size_t image_bytes, int packet_size, double bps) {
   const double bytes =
       static_cast<double>(image_bytes) + packets * (kHeaders + kEthernet) + kLeaderTrailer;
   return bytes * 8.0 / bps * 1e3;
+}
+
+// The wire time of the frames a run's transport alone received (the region's size), at the
+// link's MTU and rate; NaN when it received none.
+double frame_wire_ms(const RateResult& rr, const Settings& s) {
+  const std::size_t bytes = rr.aravis ? rr.aravis->frame_bytes : 0;
+  return bytes > 0 ? wire_time_ms(bytes, s.link_mtu, rate_bps(s.link_rate)) : std::nan("");
 }
 
 // The transport a decision waits for, p50: an exposure's two frames through Aravis (the later of
@@ -2025,8 +2028,7 @@ void print_link_table(const std::vector<RateResult>& rs, const Settings& s) {
       s.link_rate.c_str(), s.link_mtu, rs.empty() ? 0 : rs.front().pipe.link.burst);
   for (const RateResult& rr : rs) {
     const std::size_t bytes = rr.aravis ? rr.aravis->frame_bytes : 0;
-    const double wire =
-        bytes > 0 ? wire_time_ms(bytes, s.link_mtu, rate_bps(s.link_rate)) : std::nan("");
+    const double wire = frame_wire_ms(rr, s);
     // On a shared link the later of an exposure's two frames waits for both.
     const double pair = shared ? 2 * wire : wire;
     const double load = wire * 1e-3 * rr.pipe.fps * (shared ? 2 : 1);
@@ -2056,9 +2058,7 @@ void print_link_table(const std::vector<RateResult>& rs, const Settings& s) {
       shared ? "p99 <= wire time of the two frames + 0.5 ms"
              : "p50 <= wire time of the frame + 0.3 ms");
   for (const RateResult& rr : rs) {
-    const std::size_t bytes = rr.aravis ? rr.aravis->frame_bytes : 0;
-    const double wire =
-        bytes > 0 ? wire_time_ms(bytes, s.link_mtu, rate_bps(s.link_rate)) : std::nan("");
+    const double wire = frame_wire_ms(rr, s);
     const double bound = shared ? 2 * wire + 0.5 : wire + 0.3;
     const PipelineResult& p = rr.pipe;
     const double cmd = shared ? p.e2e.p99 : p.e2e.p50;
