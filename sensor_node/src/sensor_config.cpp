@@ -85,9 +85,9 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
   for (std::size_t i = 0; i < cams.size(); ++i) {
     const config::Node c = cams.at(i);
     c.refuse_unknown_keys({"sensor_id", "camera", "calibration", "reference", "reference_cache",
-                           "fps", "packet_size", "socket_buffer_bytes", "buffers", "interface",
-                           "packet_resend", "roi", "frame_timeout_s", "retry_initial_s",
-                           "retry_max_s"});
+                           "fps", "packet_size", "packet_delay_ns", "socket_buffer_bytes",
+                           "buffers", "interface", "packet_resend", "roi", "frame_timeout_s",
+                           "retry_initial_s", "retry_max_s"});
     CameraConfig cc;
     cc.sensor_id = c["sensor_id"].as_string();
     for (const auto& other : cfg.cameras) {
@@ -106,6 +106,7 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
       cc.reference_cache = (state_dir.empty() ? base : state_dir) / r->as_string();
     cc.camera.frame_rate_hz = positive(c, "fps", cc.camera.frame_rate_hz);
     cc.camera.packet_size_bytes = c.get("packet_size", cc.camera.packet_size_bytes);
+    cc.camera.packet_delay_ns = c.get("packet_delay_ns", cc.camera.packet_delay_ns);
     const std::int64_t sock =
         c.get("socket_buffer_bytes", static_cast<std::int64_t>(cc.camera.socket_buffer_bytes));
     if (sock <= 0)

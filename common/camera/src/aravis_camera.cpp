@@ -191,6 +191,10 @@ void AravisCameraOptions::validate() const {
     throw bad("packet_size_bytes", packet_size_bytes,
               "must be in 576..65500 and at most the link MTU");
   }
+  if (packet_delay_ns < -1 || packet_delay_ns > 10'000'000) {
+    throw bad("packet_delay_ns", packet_delay_ns,
+              "must be in 0..10000000 (10 ms), or -1 to leave the camera's own");
+  }
   if (socket_buffer_bytes < 65536 || socket_buffer_bytes > (std::size_t{1} << 30)) {
     throw bad("socket_buffer_bytes", socket_buffer_bytes, "must be in 65536..1073741824");
   }
@@ -260,6 +264,50 @@ struct AravisCamera::Impl {
     slot->frame_id = arv_buffer_get_frame_id(buffer);
     slot->done_ns = now;
     slot->stamped = true;
+  }
+
+  // GevSCPD from nanoseconds with the camera's tick frequency, as arv_camera_gv_set_packet_delay
+  // writes it, checked against the camera's range first and read back after.
+  void set_packet_delay(ArvCamera* cam) const {
+    GError* error = nullptr;
+    const std::int64_t ns = options.packet_delay_ns;
+    if (arv_camera_is_feature_available(cam, "GevSCPD", &error) == FALSE) {
+      g_clear_error(&error);
+      throw std::runtime_error(fmt::format(
+          "{}: packet_delay_ns = {}: the camera has no GevSCPD feature (remove the setting)",
+          where(), ns));
+    }
+    const gint64 tick_hz = arv_camera_get_integer(cam, "ArvGevTimestampTickFrequency", &error);
+    detail::throw_if_error(
+        error, fmt::format("{}: packet_delay_ns = {}: cannot read the camera's timestamp tick "
+                           "frequency, which GevSCPD counts in",
+                           where(), ns));
+    if (tick_hz <= 0 || tick_hz > 10'000'000'000LL) {
+      throw std::runtime_error(fmt::format(
+          "{}: packet_delay_ns = {}: the camera gives a timestamp tick frequency of {} Hz", where(),
+          ns, tick_hz));
+    }
+    gint64 low = 0;
+    gint64 high = 0;
+    arv_camera_get_integer_bounds(cam, "GevSCPD", &low, &high, &error);
+    detail::throw_if_error(error, fmt::format("{}: cannot read the range of GevSCPD", where()));
+    const gint64 ticks = tick_hz * ns / 1'000'000'000LL;
+    if (ticks < low || ticks > high) {
+      throw std::runtime_error(fmt::format(
+          "{}: packet_delay_ns = {} is GevSCPD = {} ticks of its {} Hz clock; the camera takes "
+          "{}..{} ticks ({}..{} ns)",
+          where(), ns, ticks, tick_hz, low, high, low * 1'000'000'000LL / tick_hz,
+          high * 1'000'000'000LL / tick_hz));
+    }
+    arv_camera_gv_set_packet_delay(cam, ns, &error);
+    detail::throw_if_error(error, fmt::format("{}: cannot set packet_delay_ns = {}", where(), ns));
+    const gint64 took = arv_camera_get_integer(cam, "GevSCPD", &error);
+    detail::throw_if_error(error, fmt::format("{}: cannot read GevSCPD back", where()));
+    if (took != ticks) {
+      throw std::runtime_error(
+          fmt::format("{}: asked packet_delay_ns = {} (GevSCPD = {} ticks); the camera took {}",
+                      where(), ns, ticks, took));
+    }
   }
 
   std::string where() const {
@@ -437,6 +485,7 @@ struct AravisCamera::Impl {
         throw std::runtime_error(fmt::format("{}: asked packet_size_bytes = {}; the camera took {}",
                                              where(), options.packet_size_bytes, packet_size));
       }
+      if (options.packet_delay_ns >= 0) set_packet_delay(cam);
     }
 
     const guint payload = arv_camera_get_payload(cam, &error);
@@ -493,18 +542,21 @@ struct AravisCamera::Impl {
 
     const char* serial = arv_camera_get_device_serial_number(camera.get(), &error);
     g_clear_error(&error);
-    description =
-        fmt::format("{} (serial {}): {}{} at {} fps, {} buffers{}", where(),
-                    serial != nullptr ? serial : "?", to_string(format),
-                    format.width == options.width && format.height == options.height
-                        ? std::string()
-                        : fmt::format(" region of interest at ({}, {}) of {}x{}", origin_x,
-                                      origin_y, options.width, options.height),
-                    options.frame_rate_hz, options.buffer_count,
-                    is_gv ? fmt::format(", packets {} B, socket buffer {} B, resend {}",
-                                        options.packet_size_bytes, options.socket_buffer_bytes,
-                                        options.packet_resend ? "on" : "off")
-                          : std::string());
+    description = fmt::format(
+        "{} (serial {}): {}{} at {} fps, {} buffers{}", where(), serial != nullptr ? serial : "?",
+        to_string(format),
+        format.width == options.width && format.height == options.height
+            ? std::string()
+            : fmt::format(" region of interest at ({}, {}) of {}x{}", origin_x, origin_y,
+                          options.width, options.height),
+        options.frame_rate_hz, options.buffer_count,
+        is_gv ? fmt::format(", packets {} B{}, socket buffer {} B, resend {}",
+                            options.packet_size_bytes,
+                            options.packet_delay_ns >= 0
+                                ? fmt::format(" {} ns apart", options.packet_delay_ns)
+                                : std::string(),
+                            options.socket_buffer_bytes, options.packet_resend ? "on" : "off")
+              : std::string());
   }
 
   void push_back(ArvBuffer* buffer) noexcept {

@@ -1,6 +1,7 @@
 #include "tactile/camera/fake_gv_camera.hpp"
 
 #include <arpa/inet.h>
+#include <dlfcn.h>
 #include <fmt/core.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -27,6 +28,15 @@ namespace tactile::camera {
 namespace {
 // The frame period (us) of the fake camera whose thread this is; 0 on every other thread.
 thread_local std::int64_t t_fake_camera_period_us = 0;
+// The inter-packet delay (ns) a receiver set on that camera (GevSCPD), and when its thread
+// last sent a packet (CLOCK_MONOTONIC); 0 on every other thread.
+thread_local std::int64_t t_fake_camera_packet_delay_ns = 0;
+thread_local std::int64_t t_fake_camera_last_send_ns = 0;
+// GigE Vision bootstrap registers: the stream channel's packet delay (SCPD0) and the timestamp
+// tick frequency it counts in.
+constexpr guint32 kGevScpd0 = 0x0d08;
+constexpr guint32 kGevTickFrequencyHigh = 0x093c;
+constexpr guint32 kGevTickFrequencyLow = 0x0940;
 // The last microseconds before a frame, still spun through: a thread woken from a sleep runs tens
 // of microseconds late on a busy machine, and the frame would leave that much after its time.
 constexpr std::int64_t kFakeCameraSpinUs = 100;
@@ -69,6 +79,28 @@ extern "C" gint g_poll(GPollFD* fds, guint nfds, gint timeout) {
     }
   }
   return ::poll(pfds, nfds, timeout);
+}
+
+// Aravis 0.8.26's ArvGvFakeCamera sends every packet of a frame back to back and ignores the
+// stream channel's packet delay (GevSCPD), which a lab sets when cameras share a link. Its
+// thread sends them with g_socket_send_to, on which this program's definition is found first,
+// as for g_poll: on a fake camera's thread with a delay set, a send waits (spinning: the delays
+// are microseconds) until that delay has passed since the thread's last send, then sends
+// through GLib's own. Every other thread sends at once.
+extern "C" gssize g_socket_send_to(GSocket* socket, GSocketAddress* address, const gchar* buffer,
+                                   gsize size, GCancellable* cancellable, GError** error) {
+  using SendTo =
+      gssize (*)(GSocket*, GSocketAddress*, const gchar*, gsize, GCancellable*, GError**);
+  static const auto glib_send_to = reinterpret_cast<SendTo>(::dlsym(RTLD_NEXT, "g_socket_send_to"));
+  const std::int64_t delay_ns = tactile::camera::t_fake_camera_packet_delay_ns;
+  if (delay_ns > 0) {
+    const std::int64_t due = tactile::camera::t_fake_camera_last_send_ns + delay_ns;
+    while (tactile::util::monotonic_ns() < due) {
+    }
+  }
+  const gssize sent = glib_send_to(socket, address, buffer, size, cancellable, error);
+  if (delay_ns > 0) tactile::camera::t_fake_camera_last_send_ns = tactile::util::monotonic_ns();
+  return sent;
 }
 
 namespace tactile::camera {
@@ -165,7 +197,23 @@ struct FakeGvCamera::Impl {
       if (t_fake_camera_period_us == 0) prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
       t_fake_camera_period_us = period_us;
     }
+    // The packet delay a receiver set (GevSCPD, in ticks of the camera's clock): the frame's
+    // packets, sent after this callback, are spaced by it (g_socket_send_to above).
+    guint32 scpd_ticks = 0;
+    guint32 tick_high = 0;
+    guint32 tick_low = 0;
+    if (self->camera) {
+      ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(self->camera.get());
+      if (arv_fake_camera_read_register(fake, kGevScpd0, &scpd_ticks) &&
+          arv_fake_camera_read_register(fake, kGevTickFrequencyHigh, &tick_high) &&
+          arv_fake_camera_read_register(fake, kGevTickFrequencyLow, &tick_low)) {
+        const auto tick_hz = (static_cast<std::uint64_t>(tick_high) << 32) | tick_low;
+        t_fake_camera_packet_delay_ns =
+            tick_hz > 0 ? static_cast<std::int64_t>(scpd_ticks * 1'000'000'000ULL / tick_hz) : 0;
+      }
+    }
     SentFrame sent;
+    sent.packet_delay_ns = t_fake_camera_packet_delay_ns;
     sent.block_id = arv_buffer_get_frame_id(buffer);
     sent.fill_time_ns = util::realtime_ns();
     const int width = arv_buffer_get_image_width(buffer);

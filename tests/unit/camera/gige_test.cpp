@@ -3,6 +3,7 @@
 // 127.0.0.2 and 127.0.0.3 on lo (support/netns_main.cpp); nothing is mocked.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <map>
 #include <memory>
@@ -395,6 +396,101 @@ TEST(GigETwoCameras, StreamAtOnceToTwoReceivers) {
   }
   expect_clean_stream(left_camera, left_report, 40);
   expect_clean_stream(right_camera, right_report, 40);
+}
+
+// The time each of `count` whole frames took from the camera's fill (just before its first
+// packet) to the receiver's completion, with the packet delay the camera sent it with.
+struct Transit {
+  std::vector<std::int64_t> ns;
+  std::vector<std::int64_t> packet_delay_ns;
+};
+
+Transit receive_transits(AravisCamera& camera, const SentLog& log, int count) {
+  Transit t;
+  const std::int64_t deadline = util::monotonic_ns() + 20'000'000'000LL;
+  while (static_cast<int>(t.ns.size()) < count && util::monotonic_ns() < deadline) {
+    const Frame f = camera.wait_frame(2s);
+    if (!f.received || f.status != FrameStatus::kComplete) continue;
+    const auto sent = log.find(f.camera_frame_id);
+    if (!sent) continue;
+    t.ns.push_back(f.receive_timestamp_ns - sent->fill_time_ns);
+    t.packet_delay_ns.push_back(sent->packet_delay_ns);
+  }
+  camera.stop();
+  EXPECT_EQ(static_cast<int>(t.ns.size()), count) << counters_text(camera.counters());
+  return t;
+}
+
+std::int64_t median(std::vector<std::int64_t> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// GevSCPD end to end: AravisCamera writes packet_delay_ns in ticks of the camera's clock, and
+// the rig's camera spaces its packets by it. Two cameras stream at once, so both meet the same
+// load: one with the largest delay the fake takes (1 us) and one with none. At 576-byte packets
+// a 640 x 480 frame is 569 packets, so the spaced camera's frames take 0.57 ms longer.
+TEST(GigEPacketDelay, TheRigsCameraSpacesItsPacketsByTheDelaySet) {
+  FakeGvCamera spaced(fake_options("127.0.0.2", "SPACED", 640, 480, PixelFormat::kMono8, 50.0));
+  FakeGvCamera plain(fake_options("127.0.0.3", "PLAIN", 640, 480, PixelFormat::kMono8, 50.0));
+  const SentLog spaced_log(spaced);
+  const SentLog plain_log(plain);
+  const TimestampCode code;
+  Renderer spaced_renderer(spaced, 11, code, 5ms);
+  Renderer plain_renderer(plain, 12, code, 5ms);
+
+  AravisCameraOptions spaced_options =
+      receiver_options("127.0.0.2", 640, 480, PixelFormat::kMono8, 50.0);
+  spaced_options.packet_size_bytes = 576;
+  spaced_options.packet_delay_ns = 1000;
+  AravisCameraOptions plain_options = spaced_options;
+  plain_options.camera = "127.0.0.3";
+  plain_options.packet_delay_ns = 0;
+  AravisCamera spaced_camera(spaced_options);
+  AravisCamera plain_camera(plain_options);
+  spaced_camera.start();
+  plain_camera.start();
+  EXPECT_NE(spaced_camera.describe().find("packets 576 B 1000 ns apart"), std::string::npos)
+      << spaced_camera.describe();
+
+  constexpr int kFrames = 25;
+  Transit with_delay;
+  Transit without;
+  {
+    std::jthread a([&] { with_delay = receive_transits(spaced_camera, spaced_log, kFrames); });
+    std::jthread b([&] { without = receive_transits(plain_camera, plain_log, kFrames); });
+  }
+  for (const std::int64_t d : with_delay.packet_delay_ns)
+    EXPECT_EQ(d, 1000);
+  for (const std::int64_t d : without.packet_delay_ns)
+    EXPECT_EQ(d, 0);
+  // 568 gaps of 1 us; half of it is enough to tell a delay from noise.
+  const std::int64_t added = median(with_delay.ns) - median(without.ns);
+  ::testing::Test::RecordProperty("added_ns", std::to_string(added));
+  EXPECT_GE(added, 284'000) << "frames with the delay took " << median(with_delay.ns)
+                            << " ns, without " << median(without.ns) << " ns";
+  // At most a frame period: the spaced camera still sends every frame in its period. (Each
+  // spaced packet wakes the receiver alone, so on a busy machine the frame takes longer than
+  // its delays: 2.5 ms with two other busy threads on two cores.)
+  EXPECT_LT(added, 20'000'000) << "the spaced frames took longer than the frame period";
+}
+
+// A delay outside the camera's GevSCPD range is refused at open by name, with the range.
+TEST(GigEPacketDelay, ADelayTheCameraCannotTakeIsRefusedWithItsRange) {
+  FakeGvCamera fake(fake_options("127.0.0.2", "SCPD", 64, 48, PixelFormat::kMono8, 10.0));
+  AravisCameraOptions o = receiver_options("127.0.0.2", 64, 48, PixelFormat::kMono8, 10.0);
+  o.packet_delay_ns = 2000;
+  AravisCamera camera(o);
+  try {
+    camera.open();
+    FAIL() << "2000 ns accepted by a camera whose GevSCPD stops at 1000 ticks of 1 GHz";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("packet_delay_ns = 2000 is GevSCPD = 2000 ticks"), std::string::npos)
+        << what;
+    EXPECT_NE(what.find("0..1000 ticks (0..1000 ns)"), std::string::npos) << what;
+  }
 }
 
 TEST(GigEErrors, AFakeCameraOnAnUnassignedAddressSaysHowToFixIt) {

@@ -2,6 +2,7 @@
 
 // A GigE Vision camera received through Aravis 0.8 (docs/camera.md says which settings and why).
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -31,6 +32,11 @@ struct AravisCameraOptions {
   // GVSP packet size in bytes, headers included: at most the MTU of the link (65000 suits lo,
   // 1500 or 9000 an Ethernet link). Range 576..65500.
   int packet_size_bytes = 65000;
+  // The inter-packet delay (GevSCPD, in ticks of the camera's timestamp clock, written from
+  // nanoseconds with its tick frequency): what a lab sets when several cameras share a link
+  // behind a switch that drops their bursts. -1 leaves the camera's own setting; 0..10 ms.
+  // open() throws when the camera cannot take it (each camera has its own range).
+  std::int64_t packet_delay_ns = -1;
   // Receive socket buffer, fixed size (the kernel caps it at net.core.rmem_max).
   std::size_t socket_buffer_bytes = std::size_t{4} << 20;
   // Frame buffers in the pool, 2..64 (4 to 8 is right for sensor_node).

@@ -53,6 +53,9 @@ struct SentFrame {
   // False when the camera's pixel format differs from format()'s, or its region does not lie
   // inside format()'s image: the image was not sent.
   bool format_matched = true;
+  // The inter-packet delay a receiver set (GevSCPD, converted to ns with the camera's 1 GHz tick
+  // frequency): the frame's packets leave at least this far apart. 0: back to back.
+  std::int64_t packet_delay_ns = 0;
 };
 
 class FakeGvCamera {
