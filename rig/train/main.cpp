@@ -83,6 +83,7 @@ int main(int argc, char** argv) {
   std::string out = "common/control/src/slip_model.inc";
   double max_time_s = 0;
   std::optional<double> decision_level;
+  std::string controller = "field";
   rig::train::BoostParams params;
   params.trees = 48;
   params.depth = 5;
@@ -119,6 +120,12 @@ int main(int argc, char** argv) {
                  "the decision level, instead of the one the training rows choose (docs/slip.md: "
                  "chosen on a validation sweep)")
       ->check(CLI::Range(-2.0, 2.0));
+  app.add_option("--controller", controller,
+                 "the slip detector in the controller of the training runs: field (the rules), or "
+                 "learned (the model compiled into this slip_train: its own decisions steer the "
+                 "runs it is trained on, as they steer the sweep's)")
+      ->check(CLI::IsMember({"field", "learned"}))
+      ->capture_default_str();
   tactile::cli::add_log_level(app, log_level);
   return tactile::cli::run(app, argc, argv, [&] {
     tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
@@ -140,7 +147,7 @@ int main(int argc, char** argv) {
           rig::Scenario sc =
               rig::parse_scenario(rig::sweep::scenario_yaml(d, max_time_s),
                                   fmt::format("seed {} scenario {}", r.seed, r.index));
-          sc.slip_detector = "field";
+          sc.slip_detector = controller;
           rig::LockstepOptions opt;
           opt.record_series = false;
           opt.slip_features = &r.log;
@@ -246,9 +253,10 @@ int main(int argc, char** argv) {
       decision = *decision_level;
     }
     const std::string training = fmt::format(
-        "slip_train --seeds {} --scenarios {} --trees {} --depth {} --learning-rate {}{}{}: {} "
+        "slip_train --seeds {} --scenarios {} --trees {} --depth {} --learning-rate {}{}{}{}: {} "
         "rows, decision {:.2f}",
         seeds_text, scenarios, params.trees, params.depth, params.learning_rate,
+        controller != "field" ? fmt::format(" --controller {}", controller) : std::string(),
         max_time_s > 0 ? fmt::format(" --max-time {}", max_time_s) : std::string(),
         decision_level ? fmt::format(" --decision {}", *decision_level) : std::string(),
         label.size(), decision);

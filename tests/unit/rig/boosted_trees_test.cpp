@@ -149,6 +149,22 @@ TEST(SlipTrain, TheModelDoesNotDependOnTheJobs) {
   EXPECT_EQ(text, util::read_file(b));
   EXPECT_NE(text.find("kSlipModel{30, 4, 4,"), std::string::npos) << text;
   EXPECT_NE(ra.err.find("run 2/2"), std::string::npos) << ra.err;
+
+  // With the model in the controller the same runs go otherwise (its decisions steer them), and
+  // the file says how it was trained.
+  const std::string c = (dir.path() / "c.inc").string();
+  const auto rc = testing::run({TACTILE_SLIP_TRAIN_PATH, "--seeds", "5", "--scenarios", "2",
+                                "--max-time", "6", "--trees", "4", "--depth", "4", "--controller",
+                                "learned", "--out", c},
+                               std::chrono::seconds(120));
+  ASSERT_EQ(rc.exit_code, 0) << rc.err;
+  const std::string steered = util::read_file(c);
+  EXPECT_NE(steered.find("--controller learned"), std::string::npos) << steered;
+  EXPECT_EQ(text.find("--controller"), std::string::npos) << text;
+  EXPECT_NE(steered, text);
+  const auto bad = testing::run({TACTILE_SLIP_TRAIN_PATH, "--controller", "paper"});
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("--controller"), std::string::npos) << bad.err;
 }
 
 }  // namespace
