@@ -153,10 +153,10 @@ TEST(SlipTrain, TheModelDoesNotDependOnTheJobs) {
   // With the model in the controller the same runs go otherwise (its decisions steer them), and
   // the file says how it was trained.
   const std::string c = (dir.path() / "c.inc").string();
-  const auto rc = testing::run({TACTILE_SLIP_TRAIN_PATH, "--seeds", "5", "--scenarios", "2",
-                                "--max-time", "6", "--trees", "4", "--depth", "4", "--controller",
-                                "learned", "--out", c},
-                               std::chrono::seconds(120));
+  const auto rc =
+      testing::run({TACTILE_SLIP_TRAIN_PATH, "--seeds", "5", "--scenarios", "2", "--max-time", "6",
+                    "--trees", "4", "--depth", "4", "--controller", "learned", "--out", c},
+                   std::chrono::seconds(120));
   ASSERT_EQ(rc.exit_code, 0) << rc.err;
   const std::string steered = util::read_file(c);
   EXPECT_NE(steered.find("--controller learned"), std::string::npos) << steered;
