@@ -266,8 +266,9 @@ struct AravisCamera::Impl {
     slot->stamped = true;
   }
 
-  // GevSCPD from nanoseconds with the camera's tick frequency, as arv_camera_gv_set_packet_delay
-  // writes it, checked against the camera's range first and read back after.
+  // GevSCPD from nanoseconds with the camera's tick frequency (the conversion
+  // arv_camera_gv_set_packet_delay makes), checked against the camera's range first and read
+  // back after.
   void set_packet_delay(ArvCamera* cam) const {
     GError* error = nullptr;
     const std::int64_t ns = options.packet_delay_ns;
@@ -299,7 +300,7 @@ struct AravisCamera::Impl {
           where(), ns, ticks, tick_hz, low, high, low * 1'000'000'000LL / tick_hz,
           high * 1'000'000'000LL / tick_hz));
     }
-    arv_camera_gv_set_packet_delay(cam, ns, &error);
+    arv_camera_set_integer(cam, "GevSCPD", ticks, &error);
     detail::throw_if_error(error, fmt::format("{}: cannot set packet_delay_ns = {}", where(), ns));
     const gint64 took = arv_camera_get_integer(cam, "GevSCPD", &error);
     detail::throw_if_error(error, fmt::format("{}: cannot read GevSCPD back", where()));

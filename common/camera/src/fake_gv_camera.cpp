@@ -188,12 +188,14 @@ struct FakeGvCamera::Impl {
                    guint32 /*gain*/, ArvPixelFormat pixel_format) {
     // Runs once per frame on the fake camera's only thread, which also answers GVCP: one copy.
     auto* self = static_cast<Impl*>(user_data);
+    // The registers a receiver writes, read per frame; not owned.
+    ArvFakeCamera* fake =
+        self->camera ? arv_gv_fake_camera_get_fake_camera(self->camera.get()) : nullptr;
     // This thread streams at the camera's period (see g_poll above). The register, not the
     // options: a client may change the frame rate.
     guint32 period_us = 0;
-    if (self->camera && arv_fake_camera_read_register(
-                            arv_gv_fake_camera_get_fake_camera(self->camera.get()),
-                            ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US, &period_us)) {
+    if (fake && arv_fake_camera_read_register(
+                    fake, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US, &period_us)) {
       if (t_fake_camera_period_us == 0) prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
       t_fake_camera_period_us = period_us;
     }
@@ -202,15 +204,12 @@ struct FakeGvCamera::Impl {
     guint32 scpd_ticks = 0;
     guint32 tick_high = 0;
     guint32 tick_low = 0;
-    if (self->camera) {
-      ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(self->camera.get());
-      if (arv_fake_camera_read_register(fake, kGevScpd0, &scpd_ticks) &&
-          arv_fake_camera_read_register(fake, kGevTickFrequencyHigh, &tick_high) &&
-          arv_fake_camera_read_register(fake, kGevTickFrequencyLow, &tick_low)) {
-        const auto tick_hz = (static_cast<std::uint64_t>(tick_high) << 32) | tick_low;
-        t_fake_camera_packet_delay_ns =
-            tick_hz > 0 ? static_cast<std::int64_t>(scpd_ticks * 1'000'000'000ULL / tick_hz) : 0;
-      }
+    if (fake && arv_fake_camera_read_register(fake, kGevScpd0, &scpd_ticks) &&
+        arv_fake_camera_read_register(fake, kGevTickFrequencyHigh, &tick_high) &&
+        arv_fake_camera_read_register(fake, kGevTickFrequencyLow, &tick_low)) {
+      const auto tick_hz = (static_cast<std::uint64_t>(tick_high) << 32) | tick_low;
+      t_fake_camera_packet_delay_ns =
+          tick_hz > 0 ? static_cast<std::int64_t>(scpd_ticks * 1'000'000'000ULL / tick_hz) : 0;
     }
     SentFrame sent;
     sent.packet_delay_ns = t_fake_camera_packet_delay_ns;
@@ -222,8 +221,7 @@ struct FakeGvCamera::Impl {
     // frame holds that part of the published sensor image.
     guint32 offset_x = 0;
     guint32 offset_y = 0;
-    if (self->camera) {
-      ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(self->camera.get());
+    if (fake) {
       arv_fake_camera_read_register(fake, ARV_FAKE_CAMERA_REGISTER_X_OFFSET, &offset_x);
       arv_fake_camera_read_register(fake, ARV_FAKE_CAMERA_REGISTER_Y_OFFSET, &offset_y);
     }
