@@ -95,6 +95,7 @@ def main(argv):
     ap.add_argument("--rate", required=True)
     ap.add_argument("--fps", type=float, required=True)
     ap.add_argument("--packet-size", type=int, required=True)
+    ap.add_argument("--mtu", type=int, default=1500, help="the links' MTU (for the table's heading)")
     ap.add_argument("--out", required=True)
     ap.add_argument("runs", nargs="+", help="topology-roi, each with OUT/RUN.tlog")
     a = ap.parse_args(argv)
@@ -124,7 +125,7 @@ def main(argv):
                 f"| {run} | {sid} | (no SensorStats) | | | {r['fps']:.1f} | {r['frames']} | "
                 f"{r['incomplete']} | {lat['p50']:.2f} / {lat['p99']:.2f} / {lat['max']:.2f} |")
     header = (
-        f"Two cameras asked for {a.fps:g} fps each, links at {a.rate}, MTU 1500, "
+        f"Two cameras asked for {a.fps:g} fps each, links at {a.rate}, MTU {a.mtu}, "
         f"{a.packet_size}-byte GVSP packets.\n\n"
         "| run | camera | region | wire time of a frame, ms | link load needed | "
         "frames/s received | frames | incomplete | camera -> received ms p50 / p99 / max |\n"
@@ -133,7 +134,7 @@ def main(argv):
     with open(os.path.join(a.out, "gige-link.md"), "w") as f:
         f.write(table)
     with open(os.path.join(a.out, "gige-link.json"), "w") as f:
-        json.dump({"rate": a.rate, "fps": a.fps, "packet_size": a.packet_size,
+        json.dump({"rate": a.rate, "fps": a.fps, "mtu": a.mtu, "packet_size": a.packet_size,
                    "runs": results}, f, indent=1)
     print(table)
 

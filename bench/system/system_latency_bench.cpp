@@ -595,6 +595,11 @@ class CameraLink {
  public:
   CameraLink(const Settings& s, const fs::path& log) : log_(log) {
     if (s.camera_link == "loopback") return;
+    // The logs are appended to (every run of --runs, and an --out directory used again): only
+    // what this camera-link writes names this link's namespace.
+    std::error_code size_error;
+    const auto start = fs::file_size(log, size_error);
+    const std::streamoff from = size_error ? 0 : static_cast<std::streamoff>(start);
     child_.emplace("camera-link",
                    std::vector<std::string>{
                        "/bin/bash", (fs::path(TACTILE_SOURCE_DIR) / "scripts/camera-link").string(),
@@ -604,6 +609,7 @@ class CameraLink {
     const std::int64_t deadline = util::monotonic_ns() + 20'000'000'000;
     while (util::monotonic_ns() < deadline) {
       std::ifstream in(log);
+      in.seekg(from);
       for (std::string line; std::getline(in, line);) {
         std::istringstream words(line);
         std::string c, cameras, n, netns, l, links, o, nodes, b;
@@ -669,12 +675,13 @@ class CameraLink {
   int burst_ = 0;
 };
 
-// The link alone: `bursts` times, the UDP datagrams of `packets` GVSP packets of the link's MTU
-// (one exposure's: both frames on a shared link, one on a link of its own) sent at once with
-// sendmmsg from the cameras' namespace to the nodes' end of the (first) link, 20 ms apart; the
-// time from each burst's send to its last datagram received, over the bursts that arrived whole.
-// What the emulated wire itself takes, to set beside the frame's computed wire time.
-Dist probe_link(const CameraLink& link, int mtu, std::size_t packets, int bursts) {
+// The link alone: `bursts` times, UDP datagrams of the sizes given (one exposure's GVSP packets:
+// both frames on a shared link, one on a link of its own) sent at once with sendmmsg from the
+// cameras' namespace to the nodes' end of the (first) link, 20 ms apart; the time from each
+// burst's send to its last datagram received, over the bursts that arrived whole. What the
+// emulated wire itself takes, to set beside the frame's computed wire time.
+Dist probe_link(const CameraLink& link, const std::vector<std::size_t>& sizes, int bursts) {
+  const std::size_t packets = sizes.size();
   if (!link.shaped() || packets == 0) return {};
   const auto fail = [](const std::string& what) {
     return std::runtime_error(fmt::format("link probe: {}: {}", what, std::strerror(errno)));
@@ -706,8 +713,9 @@ Dist probe_link(const CameraLink& link, int mtu, std::size_t packets, int bursts
     std::uint32_t burst;
     std::int64_t sent_ns;
   };
-  const std::size_t size = static_cast<std::size_t>(mtu) - 28;  // IPv4 20, UDP 8
-  std::vector<std::vector<char>> payload(packets, std::vector<char>(size));
+  std::vector<std::vector<char>> payload;
+  for (const std::size_t size : sizes)
+    payload.emplace_back(std::max(size, sizeof(Header)));
   std::vector<iovec> iov(packets);
   std::vector<mmsghdr> msgs(packets);
   std::jthread sender([&] {
@@ -715,7 +723,7 @@ Dist probe_link(const CameraLink& link, int mtu, std::size_t packets, int bursts
       const Header h{static_cast<std::uint32_t>(b), util::realtime_ns()};
       for (std::size_t i = 0; i < packets; ++i) {
         std::memcpy(payload[i].data(), &h, sizeof h);
-        iov[i] = {payload[i].data(), size};
+        iov[i] = {payload[i].data(), payload[i].size()};
         msgs[i] = {};
         msgs[i].msg_hdr.msg_iov = &iov[i];
         msgs[i].msg_hdr.msg_iovlen = 1;
@@ -738,7 +746,7 @@ Dist probe_link(const CameraLink& link, int mtu, std::size_t packets, int bursts
     if (current != ~0U && count == packets)
       whole.push_back(static_cast<double>(last_ns - sent_ns) * 1e-6);
   };
-  std::vector<char> buf(static_cast<std::size_t>(mtu));
+  std::vector<char> buf(*std::max_element(sizes.begin(), sizes.end()) + sizeof(Header));
   for (;;) {
     const ssize_t k = ::recv(rx, buf.data(), buf.size(), 0);
     if (k < static_cast<ssize_t>(sizeof(Header))) break;  // 200 ms of silence: the last burst is in
@@ -1527,13 +1535,21 @@ AravisResult run_aravis(const Settings& s, double fps, const std::string& roi,
   r.link = link.stop();
   r.frame_bytes = std::max(counts[0].frame_bytes, counts[1].frame_bytes);
   if (s.camera_link != "loopback" && r.frame_bytes > 0) {
-    // The packets of one exposure on a link: its frame's (or both frames' on a shared link), a
-    // leader and a trailer each, sent through a fresh link so its counters stay the run's.
+    // The packets of one exposure on a link, as wire_time_ms counts them: its frame's (or both
+    // frames' on a shared link) image bytes in packets of the link's MTU, a leader and a trailer
+    // each (48 bytes of GVSP payload); as UDP payloads (GVSP header 8 bytes), sent through a
+    // fresh link so its counters stay the run's.
     const std::size_t per_packet = static_cast<std::size_t>(s.link_mtu) - 36;
-    const std::size_t per_frame = (r.frame_bytes + per_packet - 1) / per_packet + 2;
-    r.link_alone_packets = per_frame * (s.camera_link == "shared" ? 2 : 1);
+    std::vector<std::size_t> sizes;
+    for (int frame = 0; frame < (s.camera_link == "shared" ? 2 : 1); ++frame) {
+      sizes.push_back(8 + 48);
+      for (std::size_t left = r.frame_bytes; left > 0; left -= std::min(left, per_packet))
+        sizes.push_back(8 + std::min(left, per_packet));
+      sizes.push_back(8 + 48);
+    }
+    r.link_alone_packets = sizes.size();
     CameraLink alone(s, dir / "logs" / "link-alone-camera-link.log");
-    r.link_alone = probe_link(alone, s.link_mtu, r.link_alone_packets, 200);
+    r.link_alone = probe_link(alone, sizes, 200);
     alone.stop();
   }
   std::vector<double> both = lat[0];

@@ -52,5 +52,31 @@ TEST(GigeLink, TheRegionOfInterestCarriesTwoCamerasThatWholeFramesOverload) {
   }
 }
 
+// The links at MTU 9000 with 8192-byte GVSP packets (docs/deployment.md): the region arrives
+// whole (with a burst of one jumbo packet every frame had arrived incomplete), its wire time
+// counted at that packet size.
+TEST(GigeLink, AtMtu9000TheRegionArrivesWholeInJumboPackets) {
+  ASSERT_EQ(::geteuid(), 0U) << "network namespaces and tc need root (CI runs as root)";
+  TempDir dir;
+  const auto r = testing::run({"bash", (kSource / "scripts/bench-gige-link").string(), "--build",
+                               TACTILE_BUILD_DIR, "--out", (dir / "out").string(), "--topologies",
+                               "separate", "--rois", "auto", "--seconds", "3", "--mtu", "9000"},
+                              120s);
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("MTU 9000, 8192-byte GVSP packets"), std::string::npos) << r.out;
+  std::ifstream in(dir / "out" / "gige-link.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["mtu"], 9000);
+  EXPECT_EQ(j["packet_size"], 8192);
+  for (const char* cam : {"left", "right"}) {
+    const auto& part = j["runs"]["separate-auto"][cam];
+    SCOPED_TRACE(cam);
+    // 145,924 image bytes in 18 packets of 8156, 74 bytes of headers each, leader and trailer.
+    EXPECT_NEAR(part["wire_time_ms"].get<double>(), 1.180, 0.005);
+    EXPECT_EQ(part["incomplete"].get<int>(), 0);
+    EXPECT_GT(part["frames"].get<int>(), 300);
+  }
+}
+
 }  // namespace
 }  // namespace tactile
