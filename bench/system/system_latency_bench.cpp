@@ -675,6 +675,22 @@ class CameraLink {
   int burst_ = 0;
 };
 
+// The IP packets (bytes) a camera sends for one frame of `image_bytes` at GVSP packet size
+// `packet_size`: a leader, the image in data packets (IPv4 20, UDP 8 and GVSP 8 bytes of each
+// are headers) and a trailer (about 48 bytes of GVSP payload each) - the arithmetic of
+// bench/system/gige_link_report.py.
+constexpr std::size_t kGvspIpUdpHeaders = 36;
+constexpr std::size_t kIpUdpHeaders = 28;
+std::vector<std::size_t> gvsp_frame_packets(std::size_t image_bytes, std::size_t packet_size) {
+  constexpr std::size_t kLeaderTrailer = kGvspIpUdpHeaders + 48;
+  const std::size_t per_packet = packet_size - kGvspIpUdpHeaders;
+  std::vector<std::size_t> packets{kLeaderTrailer};
+  for (std::size_t left = image_bytes; left > 0; left -= std::min(left, per_packet))
+    packets.push_back(kGvspIpUdpHeaders + std::min(left, per_packet));
+  packets.push_back(kLeaderTrailer);
+  return packets;
+}
+
 // The link alone: `bursts` times, UDP datagrams of the sizes given (one exposure's GVSP packets:
 // both frames on a shared link, one on a link of its own) sent at once with sendmmsg from the
 // cameras' namespace to the nodes' end of the (first) link, 20 ms apart; the time from each
@@ -1535,18 +1551,14 @@ AravisResult run_aravis(const Settings& s, double fps, const std::string& roi,
   r.link = link.stop();
   r.frame_bytes = std::max(counts[0].frame_bytes, counts[1].frame_bytes);
   if (s.camera_link != "loopback" && r.frame_bytes > 0) {
-    // The packets of one exposure on a link, as wire_time_ms counts them: its frame's (or both
-    // frames' on a shared link) image bytes in packets of the link's MTU, a leader and a trailer
-    // each (48 bytes of GVSP payload); as UDP payloads (GVSP header 8 bytes), sent through a
-    // fresh link so its counters stay the run's.
-    const std::size_t per_packet = static_cast<std::size_t>(s.link_mtu) - 36;
+    // The packets of one exposure on a link, as wire_time_ms counts them (its frame's, or both
+    // frames' on a shared link, at the link's MTU), as UDP payloads, sent through a fresh link
+    // so its counters stay the run's.
     std::vector<std::size_t> sizes;
-    for (int frame = 0; frame < (s.camera_link == "shared" ? 2 : 1); ++frame) {
-      sizes.push_back(8 + 48);
-      for (std::size_t left = r.frame_bytes; left > 0; left -= std::min(left, per_packet))
-        sizes.push_back(8 + std::min(left, per_packet));
-      sizes.push_back(8 + 48);
-    }
+    for (int frame = 0; frame < (s.camera_link == "shared" ? 2 : 1); ++frame)
+      for (const std::size_t ip :
+           gvsp_frame_packets(r.frame_bytes, static_cast<std::size_t>(s.link_mtu)))
+        sizes.push_back(ip - kIpUdpHeaders);
     r.link_alone_packets = sizes.size();
     CameraLink alone(s, dir / "logs" / "link-alone-camera-link.log");
     r.link_alone = probe_link(alone, sizes, 200);
@@ -1721,17 +1733,16 @@ double rate_bps(const std::string& rate) {
   return std::stod(m[1]) * unit;
 }
 
-// The time a frame of `image_bytes` takes on the link: its GVSP data packets of `packet_size`
-// bytes (IPv4 20, UDP 8 and GVSP 8 of each are headers), each with 38 bytes of Ethernet around
-// it (header 14, FCS 4, preamble 8, inter-frame gap 12), and a leader and a trailer (about 48
-// bytes of payload each) - the arithmetic of bench/system/gige_link_report.py. In ms.
+// The time a frame of `image_bytes` takes on the link: its GVSP packets (gvsp_frame_packets),
+// each with 38 bytes of Ethernet around it (header 14, FCS 4, preamble 8, inter-frame gap 12).
+// In ms.
 double wire_time_ms(std::size_t image_bytes, int packet_size, double bps) {
-  constexpr double kHeaders = 36, kEthernet = 38, kLeaderTrailer = 2 * (36 + 48 + 38);
-  const double per_packet = packet_size - kHeaders;
-  const double packets = std::ceil(static_cast<double>(image_bytes) / per_packet);
-  const double bytes =
-      static_cast<double>(image_bytes) + packets * (kHeaders + kEthernet) + kLeaderTrailer;
-  return bytes * 8.0 / bps * 1e3;
+  constexpr std::size_t kEthernet = 38;
+  std::size_t bytes = 0;
+  for (const std::size_t ip :
+       gvsp_frame_packets(image_bytes, static_cast<std::size_t>(packet_size)))
+    bytes += ip + kEthernet;
+  return static_cast<double>(bytes) * 8.0 / bps * 1e3;
 }
 
 // The wire time of the frames a run's transport alone received (the region's size), at the
