@@ -31,7 +31,10 @@ thread_local std::int64_t t_fake_camera_period_us = 0;
 // The inter-packet delay (ns) a receiver set on that camera (GevSCPD), and when its thread
 // last sent a packet (CLOCK_MONOTONIC); 0 on every other thread.
 thread_local std::int64_t t_fake_camera_packet_delay_ns = 0;
-thread_local std::int64_t t_fake_camera_last_send_ns = 0;
+thread_local std::int64_t t_fake_camera_last_send_ns = 0;  // 0: no packet yet in this frame
+// The time between the current frame's packets so far: from the end of each send to the start of
+// the next, summed (SentFrame::previous_frame_packet_gaps_ns).
+thread_local std::int64_t t_fake_camera_frame_gaps_ns = 0;
 // GigE Vision bootstrap registers: the stream channel's packet delay (SCPD0) and the timestamp
 // tick frequency it counts in.
 constexpr guint32 kGevScpd0 = 0x0d08;
@@ -85,21 +88,26 @@ extern "C" gint g_poll(GPollFD* fds, guint nfds, gint timeout) {
 // stream channel's packet delay (GevSCPD), which a lab sets when cameras share a link. Its
 // thread sends them with g_socket_send_to, on which this program's definition is found first,
 // as for g_poll: on a fake camera's thread with a delay set, a send waits (spinning: the delays
-// are microseconds) until that delay has passed since the thread's last send, then sends
-// through GLib's own. Every other thread sends at once.
+// are microseconds) until that delay has passed since the end of the frame's previous send, then
+// sends through GLib's own; the time between a frame's sends is summed for SentFrame. Every
+// other thread sends at once.
 extern "C" gssize g_socket_send_to(GSocket* socket, GSocketAddress* address, const gchar* buffer,
                                    gsize size, GCancellable* cancellable, GError** error) {
   using SendTo =
       gssize (*)(GSocket*, GSocketAddress*, const gchar*, gsize, GCancellable*, GError**);
   static const auto glib_send_to = reinterpret_cast<SendTo>(::dlsym(RTLD_NEXT, "g_socket_send_to"));
+  if (tactile::camera::t_fake_camera_period_us == 0)
+    return glib_send_to(socket, address, buffer, size, cancellable, error);
   const std::int64_t delay_ns = tactile::camera::t_fake_camera_packet_delay_ns;
-  if (delay_ns > 0) {
-    const std::int64_t due = tactile::camera::t_fake_camera_last_send_ns + delay_ns;
-    while (tactile::util::monotonic_ns() < due) {
-    }
+  const std::int64_t last = tactile::camera::t_fake_camera_last_send_ns;
+  std::int64_t start = tactile::util::monotonic_ns();
+  if (delay_ns > 0 && last != 0) {
+    while (start < last + delay_ns)
+      start = tactile::util::monotonic_ns();
   }
+  if (last != 0) tactile::camera::t_fake_camera_frame_gaps_ns += start - last;
   const gssize sent = glib_send_to(socket, address, buffer, size, cancellable, error);
-  if (delay_ns > 0) tactile::camera::t_fake_camera_last_send_ns = tactile::util::monotonic_ns();
+  tactile::camera::t_fake_camera_last_send_ns = tactile::util::monotonic_ns();
   return sent;
 }
 
@@ -213,6 +221,10 @@ struct FakeGvCamera::Impl {
     }
     SentFrame sent;
     sent.packet_delay_ns = t_fake_camera_packet_delay_ns;
+    // The previous frame's packets have all left: this frame's first packet waits for no delay.
+    sent.previous_frame_packet_gaps_ns = t_fake_camera_frame_gaps_ns;
+    t_fake_camera_frame_gaps_ns = 0;
+    t_fake_camera_last_send_ns = 0;
     sent.block_id = arv_buffer_get_frame_id(buffer);
     sent.fill_time_ns = util::realtime_ns();
     const int width = arv_buffer_get_image_width(buffer);

@@ -522,7 +522,9 @@ TEST(HandNode, ArmControllerSilentPastArmLostHoldsAndExitsFour) {
 }
 
 TEST(HandNode, RunsThePapersTaskAndEndsDone) {
-  HandNodeRun run;
+  // Stale only after 0.25 s, as KeepsWorkingUnderAFloodOfBadMessages: a stale hold in the short
+  // lowering would end the task aborted, whatever the holds below allow.
+  HandNodeRun run("", 0.05, 0.005, 0.25);
   const RunResult r = run.run(paper_story, 40s);
   ASSERT_FALSE(r.process.timed_out) << r.process.err;
   EXPECT_EQ(r.process.exit_code, 0) << r.process.err;
@@ -731,7 +733,12 @@ std::uint64_t logged_count(const std::string& log, const std::string& what) {
 }
 
 TEST(HandNode, KeepsWorkingUnderAFloodOfBadMessages) {
-  HandNodeRun run;
+  // Stale only after 0.25 s: this test is about bad messages. The flood and its sender load the
+  // two cores, this process then publishes late, and one stale hold in the 5-frame lowering
+  // restarts it inside resume_settle_s, where the bottle's slip is not classified (a stop's CI
+  // aborted so: "lowered to lower_limit_m without a negative slip"). HoldsOnStaleDataAndResumes
+  // tests the holds.
+  HandNodeRun run("", 0.05, 0.005, 0.25);
   Flood flood;
   flood.tactile_messages = 100'000;
   flood.arm_messages_per_frame = 30;

@@ -56,6 +56,10 @@ struct SentFrame {
   // The inter-packet delay a receiver set (GevSCPD, converted to ns with the camera's 1 GHz tick
   // frequency): the frame's packets leave at least this far apart. 0: back to back.
   std::int64_t packet_delay_ns = 0;
+  // The camera's previous frame (block_id - 1, when it sent one): the time between its packets,
+  // from the end of each send to the start of the next, summed. With a packet delay it is at
+  // least (packets - 1) x the delay, however busy the machine; back to back, the send loop's own.
+  std::int64_t previous_frame_packet_gaps_ns = 0;
 };
 
 class FakeGvCamera {
