@@ -160,15 +160,19 @@ void HandNode::on_arm_message() {
     have_arm_ = true;
     // Beside the events, for recordings and plots (the arm link itself is point to point).
     if (events_) events_->send(wire::kArmTopic, arm_buf_);
-    if (arm_state_.deadman && !deadman_seen_) {
-      deadman_seen_ = true;
+    if (arm_state_.deadman) {
       // The arm held because it heard nothing from us for a while (we were not scheduled, or
-      // the link stalled). We are here: carry on with what the arm was doing.
-      util::log_warn("the arm controller's deadman held the arm: resuming the current motion");
+      // the link stalled). We are here: carry on with what the arm was doing. Every ArmState
+      // that reports a hold is answered: a second hold may come before an ArmState without one
+      // (the arm reports each hold at least once, docs/arm.md), and a motion sent again is the
+      // same segment.
+      if (!deadman_seen_)
+        util::log_warn("the arm controller's deadman held the arm: resuming the current motion");
+      deadman_seen_ = true;
       const std::int64_t now = util::monotonic_ns();
       if (last_motion_) send_command(*last_motion_, now);
       if (last_velocities_) send_command(*last_velocities_, now);
-    } else if (!arm_state_.deadman) {
+    } else {
       deadman_seen_ = false;
     }
     last_arm_ns_ = util::monotonic_ns();

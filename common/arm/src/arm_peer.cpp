@@ -32,6 +32,7 @@ ArmPeer::Heard ArmPeer::command(std::string_view from, std::int64_t now_ns) {
 bool ArmPeer::deadman_trips(std::int64_t now_ns) {
   if (!has_peer_ || held_ || now_ns - last_heard_ns_ <= deadman_ns_) return false;
   held_ = true;
+  unreported_ = true;
   return true;
 }
 

@@ -108,7 +108,7 @@ bool ArmServer::send_state(std::int64_t now_ns) {
   wire::ArmStateData s = backend_.read(now_ns);
   if (s.time_ns == 0) s.time_ns = now_ns;
   s.last_command_sequence = last_command_;
-  s.deadman = peer_.held();
+  s.deadman = peer_.report_deadman();
   wire::fill_arm_state(s, options_.fingertip_ids, *state_env_.mutable_arm_state());
   send_envelope(state_env_, now_ns);
   ++counters_.states_sent;

@@ -99,5 +99,24 @@ TEST(ArmPeer, TheSamePeerCommandingAgainEndsTheHold) {
   EXPECT_TRUE(p.deadman_trips(70 * kMs + kDeadman + 1));
 }
 
+// A hold is reported by at least one ArmState even when a command ends it first (the client had
+// sent a velocity change meanwhile): the stopped motion must be sent again, and only the report
+// says so. Reported once; a hold still on is reported by every state.
+TEST(ArmPeer, EveryHoldIsReportedAtLeastOnceEvenWhenACommandEndsItFirst) {
+  ArmPeer p(kDeadman);
+  p.command("hand", 0);
+  EXPECT_FALSE(p.report_deadman());
+  ASSERT_TRUE(p.deadman_trips(50 * kMs));
+  EXPECT_TRUE(p.command("hand", 55 * kMs).resumed);  // before any state
+  EXPECT_FALSE(p.held());
+  EXPECT_TRUE(p.report_deadman());
+  EXPECT_FALSE(p.report_deadman());
+  ASSERT_TRUE(p.deadman_trips(55 * kMs + kDeadman + 1));
+  EXPECT_TRUE(p.report_deadman());
+  EXPECT_TRUE(p.report_deadman());  // still held
+  p.command("hand", 200 * kMs);
+  EXPECT_FALSE(p.report_deadman());  // this hold was reported
+}
+
 }  // namespace
 }  // namespace tactile::arm

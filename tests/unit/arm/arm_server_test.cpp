@@ -142,6 +142,29 @@ TEST_F(ArmServerOverSockets, TheDeadmanTripsOnceAndTheStatesSaySoUntilACommand) 
   EXPECT_FALSE(has_fault(*resumed, v1::ARM_FAULT_DEADMAN));
 }
 
+// The hold's only report is the DEADMAN fault: a command that ends the hold before the next
+// state (hand_node's velocity change, sent while it did not know) must not swallow it, or the
+// motion the hold stopped is never sent again (a sanitizer CI run's lowering "timed out").
+TEST_F(ArmServerOverSockets, AHoldACommandEndedBeforeAnyStateIsStillReportedOnce) {
+  ArmServer server(ctx, options(), arm);
+  wire::Dealer hand(ctx, server.endpoint());
+  ASSERT_TRUE(hand.send(wire::bytes_of(heartbeat())));
+  ASSERT_TRUE(serve_next(server, 100 * kMs));
+  server.check_deadman(141 * kMs);
+  ASSERT_EQ(arm.holds.size(), 1U);
+  ASSERT_TRUE(hand.send(wire::bytes_of(command(control::Command::hold(), 1))));
+  ASSERT_TRUE(serve_next(server, 150 * kMs));
+  EXPECT_FALSE(server.peer().held());
+  ASSERT_TRUE(server.send_state(160 * kMs));
+  const auto first = state_at(hand, 2000ms);
+  ASSERT_TRUE(first);
+  EXPECT_TRUE(has_fault(*first, v1::ARM_FAULT_DEADMAN));
+  ASSERT_TRUE(server.send_state(170 * kMs));
+  const auto second = state_at(hand, 2000ms);
+  ASSERT_TRUE(second);
+  EXPECT_FALSE(has_fault(*second, v1::ARM_FAULT_DEADMAN));
+}
+
 TEST_F(ArmServerOverSockets, AStrangersHeartbeatIsRefusedWhileThePeerIsAlive) {
   ArmServer server(ctx, options(), arm);
   wire::Dealer hand(ctx, server.endpoint());

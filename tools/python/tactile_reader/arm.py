@@ -86,6 +86,7 @@ class ArmPeer:
         self.deadman_ns = deadman_ns
         self.peer: Optional[bytes] = None
         self.held = False
+        self.unreported = False  # a hold no ArmState has reported yet
         self.last_heard_ns = 0
 
     def heartbeat(self, sender: bytes, now_ns: int) -> Tuple[bool, bool, bool]:
@@ -110,7 +111,16 @@ class ArmPeer:
         if self.peer is None or self.held or now_ns - self.last_heard_ns <= self.deadman_ns:
             return False
         self.held = True
+        self.unreported = True
         return True
+
+    def report_deadman(self) -> bool:
+        """What the next ArmState says (ARM_FAULT_DEADMAN): held, or held since the last
+        ArmState. A command may end the hold before any ArmState reported it; the client must
+        still learn that its motion was stopped, so the report is latched until one carried it."""
+        report = self.held or self.unreported
+        self.unreported = False
+        return report
 
 
 def _finite(*values: float) -> bool:
@@ -435,7 +445,8 @@ class ArmServer:
         self.last_sent_ns = now_ns
 
     def send_state(self, now_ns: int) -> bool:
-        """Sends the peer the backend's state (DEADMAN while held); False without a peer."""
+        """Sends the peer the backend's state (DEADMAN while held, and once after a hold a command
+        ended before any state reported it); False without a peer."""
         if self.peer.peer is None:
             return False
         s = self.backend.read(now_ns)
@@ -451,7 +462,7 @@ class ArmServer:
             f.velocity_mps.x, f.velocity_mps.y, f.velocity_mps.z = s.fingertip_velocity_mps[i]
         a.active_segment_id = s.active_segment_id
         a.segment_done = s.segment_done
-        if self.peer.held:
+        if self.peer.report_deadman():
             a.faults.append(tactile_pb2.ARM_FAULT_DEADMAN)
         if s.limit:
             a.faults.append(tactile_pb2.ARM_FAULT_LIMIT)

@@ -112,6 +112,21 @@ class ArmServerTest(unittest.TestCase):
         self.assertNotIn(tactile_pb2.ARM_FAULT_DEADMAN, s.faults)
         self.assertEqual(s.last_command_sequence, 5)
 
+    def test_a_hold_a_command_ended_before_any_state_is_still_reported_once(self):
+        server = self.server(deadman_s=0.04)
+        hand = self.client(server)
+        hand.send(heartbeat())
+        self.assertTrue(self.serve_next(server, 100 * MS))
+        server.check_deadman(141 * MS)
+        self.assertEqual(self.arm.holds, [141 * MS])
+        hand.send(hold_command(1))
+        self.assertTrue(self.serve_next(server, 150 * MS))
+        self.assertFalse(server.peer.held)
+        self.assertTrue(server.send_state(160 * MS))
+        self.assertIn(tactile_pb2.ARM_FAULT_DEADMAN, self.state(hand).faults)
+        self.assertTrue(server.send_state(170 * MS))
+        self.assertNotIn(tactile_pb2.ARM_FAULT_DEADMAN, self.state(hand).faults)
+
     def test_a_strangers_heartbeat_is_refused_while_the_peer_is_alive(self):
         server = self.server()
         hand, stranger = self.client(server), self.client(server)

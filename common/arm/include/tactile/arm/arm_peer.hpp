@@ -12,7 +12,8 @@ namespace tactile::arm {
 // The client the arm answers (its peer) and the deadman that holds the arm when that client
 // falls silent. The peer is the first client that spoke (a heartbeat) or the last that sent a
 // valid command; garbage never changes it, and only its words keep the deadman from tripping.
-// The hold lasts until a client commands again (its ArmStates carry the fault meanwhile).
+// The hold lasts until a client commands again (its ArmStates carry the fault meanwhile, and at
+// least once).
 class ArmPeer {
  public:
   // What a message changed, for the log.
@@ -36,8 +37,17 @@ class ArmPeer {
 
   bool has_peer() const { return has_peer_; }
   const std::string& peer() const { return peer_; }
-  // The arm is held for the peer's silence (ARM_FAULT_DEADMAN).
+  // The arm is held for the peer's silence.
   bool held() const { return held_; }
+  // What the next ArmState says (ARM_FAULT_DEADMAN): the arm is held, or was held since the last
+  // ArmState. A hold ends at the peer's next command, which may come before any ArmState reported
+  // it (a velocity command sent meanwhile); the client must still learn that the hold stopped its
+  // motion, so the report is latched until one ArmState has carried it.
+  bool report_deadman() {
+    const bool report = held_ || unreported_;
+    unreported_ = false;
+    return report;
+  }
   std::int64_t last_heard_ns() const { return last_heard_ns_; }
   std::int64_t deadman_ns() const { return deadman_ns_; }
 
@@ -48,6 +58,7 @@ class ArmPeer {
   std::string peer_;
   bool has_peer_ = false;
   bool held_ = false;
+  bool unreported_ = false;  // a hold no ArmState has reported yet
   std::int64_t last_heard_ns_ = 0;
 };
 
