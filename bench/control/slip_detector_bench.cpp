@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "tactile/control/flag_analyzer.hpp"
@@ -94,6 +95,10 @@ BENCHMARK(learned)->ArgName("contacts")->Arg(0)->Arg(5)->Arg(20)->Arg(41);
 
 // Google Benchmark's flags only; an unknown option is a usage error (exit 2), as for every program.
 int main(int argc, char** argv) {
+  using tactile::control::SlipDetector;
+  // The model's size and the scoring path this processor takes ("avx2" or "portable").
+  benchmark::AddCustomContext("slip_model", std::to_string(SlipDetector::model_trees()) + " trees");
+  benchmark::AddCustomContext("model_scoring", SlipDetector::model_scoring());
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
   benchmark::RunSpecifiedBenchmarks();

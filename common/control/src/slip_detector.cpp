@@ -2,7 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
+#include <utility>
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#endif
 
 namespace tactile::control {
 
@@ -25,6 +31,12 @@ bool usable(const ElementReading& r) {
 // detector's time); a result that overflows is infinite, and every output is checked finite.
 inline double length(double x, double y) {
   return std::sqrt(x * x + y * y);
+}
+
+// A learned detector's signal: in float, 0 where it is not finite.
+inline float finite_signal(double v) {
+  const auto x = static_cast<float>(v);
+  return std::isfinite(x) ? x : 0.0f;
 }
 
 std::size_t element_count(const FingertipInput& in) {
@@ -77,15 +89,10 @@ RigidFit fit_rigid(const FingertipInput& in, std::size_t count, Use use) {
 }
 
 // The compiled-in model over `n` elements' signals by column, tree by tree: each split compares
-// one column with one threshold, which vectorises (on x86-64 a clone for AVX2 is chosen at load
-// time); each element's leaves are summed in model_score's order: the same decisions.
-// Not under AddressSanitizer: the clone's resolver runs before the sanitizer's start-up.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
-    !defined(__SANITIZE_ADDRESS__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-void score_batch(const std::array<std::array<float, kMaxSlipElements>, kSlipFeatures>& columns,
-                 std::size_t n, float* score, std::uint32_t* leaf) noexcept {
+// one column with one threshold; each element's leaves are summed in model_score's order, in
+// float: the same scores, so the same decisions.
+void score_portable(const SlipColumns& columns, std::size_t n, float* score) noexcept {
+  std::array<std::uint32_t, kMaxSlipElements> leaf{};
   for (std::size_t e = 0; e < n; ++e)
     score[e] = static_cast<float>(kSlipModel.base);
   for (std::size_t t = 0; t < kSlipModel.trees; ++t) {
@@ -103,6 +110,159 @@ void score_batch(const std::array<std::array<float, kMaxSlipElements>, kSlipFeat
       score[e] += leaves[leaf[e]];
   }
 }
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define TACTILE_AVX2 __attribute__((target("avx2")))
+
+constexpr std::size_t kSplits = kSlipModel.trees * kSlipModel.depth;
+
+// The model's thresholds by signal, at compile time: each signal's distinct thresholds in
+// ascending order, and each split's rank among its signal's. With an element's count of a
+// signal's thresholds below its value, `value > threshold` of the split is `count > rank`, exactly
+// (the thresholds below a value are the first `count`; NaN is below none, as for `>`).
+struct ThresholdRanks {
+  std::array<std::size_t, kSlipFeatures + 1> begin{};  // signal k's: [begin[k], begin[k + 1])
+  std::array<float, kSplits> ascending{};
+  std::array<std::int8_t, kSplits> rank{};  // of each split, minus 128 (compared signed)
+  std::size_t most = 0;                     // thresholds of the signal that has the most
+};
+
+constexpr ThresholdRanks rank_thresholds() {
+  ThresholdRanks r;
+  std::size_t size = 0;
+  for (std::size_t k = 0; k < kSlipFeatures; ++k) {
+    r.begin[k] = size;
+    for (std::size_t s = 0; s < kSplits; ++s) {
+      if (kSlipModelFeature[s] != k) continue;
+      const float v = kSlipModelThreshold[s];
+      std::size_t i = r.begin[k];
+      while (i < size && r.ascending[i] < v)
+        ++i;
+      if (i < size && r.ascending[i] == v) continue;
+      for (std::size_t j = size; j > i; --j)
+        r.ascending[j] = r.ascending[j - 1];
+      r.ascending[i] = v;
+      ++size;
+    }
+    r.most = std::max(r.most, size - r.begin[k]);
+  }
+  r.begin[kSlipFeatures] = size;
+  for (std::size_t s = 0; s < kSplits; ++s) {
+    const std::size_t k = kSlipModelFeature[s];
+    std::size_t i = r.begin[k];
+    while (r.ascending[i] != kSlipModelThreshold[s])
+      ++i;
+    r.rank[s] = static_cast<std::int8_t>(static_cast<int>(i - r.begin[k]) - 128);
+  }
+  return r;
+}
+
+inline constexpr ThresholdRanks kRanks = rank_thresholds();
+static_assert(kRanks.most <= 255, "a signal's count of thresholds must fit in a byte");
+
+// Pass 1 for `Q` blocks of 8 elements from `first` (a multiple of 32): each signal's count of
+// thresholds below each element's value, minus 128, in signed bytes (the blocks past Q count 0).
+template <std::size_t Q>
+TACTILE_AVX2 void count_thresholds_avx2(const SlipColumns& columns, std::size_t first,
+                                        std::int8_t (&count)[kSlipFeatures][kMaxSlipElements]) {
+  for (std::size_t k = 0; k < kSlipFeatures; ++k) {
+    if (kRanks.begin[k] == kRanks.begin[k + 1]) continue;  // no split on it
+    const float* column = columns[k].data() + first;
+    __m256i c[4];
+    for (auto& v : c)
+      v = _mm256_set1_epi32(-128);
+    for (std::size_t j = kRanks.begin[k]; j < kRanks.begin[k + 1]; ++j) {
+      const __m256 threshold = _mm256_set1_ps(kRanks.ascending[j]);
+      for (std::size_t q = 0; q < Q; ++q) {
+        const __m256 above = _mm256_cmp_ps(_mm256_loadu_ps(column + 8 * q), threshold, _CMP_GT_OQ);
+        c[q] = _mm256_sub_epi32(c[q], _mm256_castps_si256(above));
+      }
+    }
+    // The packs interleave 128-bit lanes; the permutation undoes it.
+    const __m256i bytes =
+        _mm256_packs_epi16(_mm256_packs_epi32(c[0], c[1]), _mm256_packs_epi32(c[2], c[3]));
+    _mm256_store_si256(
+        reinterpret_cast<__m256i*>(count[k] + first),
+        _mm256_permutevar8x32_epi32(bytes, _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7)));
+  }
+}
+
+// The same scores in AVX2, compiled by function attribute only (the build has no -mavx2) and used
+// only where the processor has it. Three passes over the frame's elements, 32 at a time in bytes
+// where they can be:
+//   1. each signal's count of thresholds below each element's value (8 floats per comparison);
+//   2. each tree's leaf index from the counts (32 elements per comparison);
+//   3. each element's leaves summed tree by tree, as model_score (8 elements per gather).
+TACTILE_AVX2 void score_avx2(const SlipColumns& columns, std::size_t n, float* score) noexcept {
+  static_assert(kMaxSlipElements % 32 == 0);
+  constexpr std::size_t kDepth = kSlipModel.depth;
+  const std::size_t halves = (n + 31) / 32;  // of 32 elements; the columns hold 64
+  alignas(32) std::int8_t count[kSlipFeatures][kMaxSlipElements];
+  for (std::size_t h = 0; h < halves; ++h) {
+    switch (std::min<std::size_t>((n - 32 * h + 7) / 8, 4)) {
+      case 1:
+        count_thresholds_avx2<1>(columns, 32 * h, count);
+        break;
+      case 2:
+        count_thresholds_avx2<2>(columns, 32 * h, count);
+        break;
+      case 3:
+        count_thresholds_avx2<3>(columns, 32 * h, count);
+        break;
+      default:
+        count_thresholds_avx2<4>(columns, 32 * h, count);
+        break;
+    }
+  }
+  // Passes 2 and 3 by chunks of trees (each chunk's leaf indices take 4 KB).
+  constexpr std::size_t kChunk = 64;
+  alignas(32) std::uint8_t leaf[kChunk][kMaxSlipElements];
+  const std::size_t blocks = (n + 7) / 8;
+  for (std::size_t b = 0; b < blocks; ++b)
+    _mm256_storeu_ps(score + 8 * b, _mm256_set1_ps(static_cast<float>(kSlipModel.base)));
+  for (std::size_t first = 0; first < kSlipModel.trees; first += kChunk) {
+    const std::size_t trees = std::min(kChunk, kSlipModel.trees - first);
+    for (std::size_t t = 0; t < trees; ++t) {
+      for (std::size_t h = 0; h < halves; ++h) {
+        // Bit d of the index is split d's answer: from the last split to the first, the index
+        // doubles and the answer (all ones, -1, when true) is subtracted.
+        __m256i index = _mm256_setzero_si256();
+        for (std::size_t d = kDepth; d-- > 0;) {
+          const std::size_t split = (first + t) * kDepth + d;
+          const __m256i c = _mm256_load_si256(
+              reinterpret_cast<const __m256i*>(count[kSlipModelFeature[split]] + 32 * h));
+          const __m256i above = _mm256_cmpgt_epi8(c, _mm256_set1_epi8(kRanks.rank[split]));
+          index = _mm256_sub_epi8(_mm256_add_epi8(index, index), above);
+        }
+        _mm256_store_si256(reinterpret_cast<__m256i*>(leaf[t] + 32 * h), index);
+      }
+    }
+    for (std::size_t b = 0; b < blocks; ++b) {
+      __m256 sum = _mm256_loadu_ps(score + 8 * b);
+      for (std::size_t t = 0; t < trees; ++t) {
+        const __m256i index = _mm256_cvtepu8_epi32(
+            _mm_loadl_epi64(reinterpret_cast<const __m128i*>(leaf[t] + 8 * b)));
+        sum = _mm256_add_ps(sum,
+                            _mm256_i32gather_ps(&kSlipModelLeaf[(first + t) << kDepth], index, 4));
+      }
+      _mm256_storeu_ps(score + 8 * b, sum);
+    }
+  }
+}
+#endif
+
+using ScoreFn = void (*)(const SlipColumns&, std::size_t, float*) noexcept;
+
+ScoreFn vector_scoring() noexcept {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx2")) return score_avx2;
+#endif
+  return nullptr;
+}
+
+// Chosen once, at start-up.
+const ScoreFn kVectorScoring = vector_scoring();
 
 }  // namespace
 
@@ -150,6 +310,30 @@ double SlipDetector::model_score(const SlipFeatures& x) noexcept {
     score += kSlipModelLeaf[(t << kSlipModel.depth) + leaf];
   }
   return static_cast<double>(score);
+}
+
+SlipFeatures SlipDetector::features(std::size_t fingertip, std::size_t element) const noexcept {
+  SlipFeatures x{};
+  if (!has_features_[fingertip][element]) return x;
+  const std::size_t e = column_of_[fingertip][element];
+  for (std::size_t k = 0; k < kSlipFeatures; ++k)
+    x[k] = columns_[fingertip][k][e];
+  return x;
+}
+
+void SlipDetector::model_scores(const SlipColumns& columns, std::size_t n,
+                                std::array<float, kMaxSlipElements>& score,
+                                ModelScoring scoring) noexcept {
+  n = std::min(n, kMaxSlipElements);
+  if (scoring == ModelScoring::kVector && kVectorScoring != nullptr) {
+    kVectorScoring(columns, n, score.data());
+  } else {
+    score_portable(columns, n, score.data());
+  }
+}
+
+const char* SlipDetector::model_scoring() noexcept {
+  return kVectorScoring != nullptr ? "avx2" : "portable";
 }
 
 double SlipDetector::model_decision() noexcept {
@@ -305,9 +489,11 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
   // The fingertip's signals for the learned detector: how much of the contact moved or left the
   // fit, and how its total normal force changed (a grip that opens or closes).
   const bool learn = kind_ == SlipDetectorKind::kLearned;
-  auto& feats = features_[f];
+  SlipColumns& columns = columns_[f];
   auto& has_feats = has_features_[f];
+  auto& column_of = column_of_[f];
   has_feats.fill(false);
+  std::size_t n = 0;  // elements with signals: columns [0, n)
   std::uint32_t n_measured = 0, n_moved = 0, n_departed = 0;
   double total_fz = 0;
   if (learn) {
@@ -377,48 +563,30 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
                              (broke ? kSlipBrokeAway : 0) | (dragged ? kSlipDragged : 0);
     const bool slides = why != 0;
     if (learn) {
+      // The element's own signals; the fingertip's (the same for every element) after the loop.
       const double rx = r.x_px - fit.cx, ry = r.y_px - fit.cy;
       const double rigid = out.rigid_mm;
       const double align =
           moved > 0 && rigid > 0 ? (r.dx_mm * fit.tx + r.dy_mm * fit.ty) / (moved * rigid) : 0.0;
       const double m = mu > 0 ? 1.0 / mu : 0.0;
-      const double v[kSlipFeatures] = {
-          moved * inv,
-          departed * inv,
-          surface * inv,
-          ratio * m,
-          h.valid ? h.ratio * m : 0.0,
-          r.fz,
-          h.valid ? r.fz - h.fz : 0.0,
-          h.valid ? h.moved : 0.0,
-          h.valid ? h.departed : 0.0,
-          rigid * inv,
-          fit.n >= 3 ? std::abs(fit.w) * std::sqrt(rx * rx + ry * ry) * inv : 0.0,
-          arm.speed_mps * 1e3,
-          arm.yaw_rate_rps * (180.0 / 3.14159265358979323846),
-          n_measured > 0 ? static_cast<double>(n_moved) / n_measured : 0.0,
-          n_measured > 0 ? static_cast<double>(n_departed) / n_measured : 0.0,
-          total_fz,
-          (total_fz - last_total_fz) / std::max(last_total_fz, 0.01),
-          static_cast<double>(why),
-          was ? 1.0 : 0.0,
-          static_cast<double>(n_measured),
-          thr * 1e3,
-          mu,
-          ft,
-          align,
-          h.valid ? h.moved2 : 0.0,
-          h.valid ? h.dfz : 0.0,
-          arm.speed_mps * 1e3 * period * inv,
-          period > 0 ? 1.0 / period : 0.0,
-          0.0,  // share_slipping and share_slipping_prev: below, once every element is decided
-          0.0,
-      };
-      SlipFeatures& x = feats[i];
-      for (std::size_t k = 0; k < kSlipFeatures; ++k) {
-        const float value = static_cast<float>(v[k]);
-        x[k] = std::isfinite(value) ? value : 0.0f;
-      }
+      const auto put = [&](std::size_t k, double v) { columns[k][n] = finite_signal(v); };
+      put(0, moved * inv);
+      put(1, departed * inv);
+      put(2, surface * inv);
+      put(3, ratio * m);
+      put(4, h.valid ? h.ratio * m : 0.0);
+      put(5, r.fz);
+      put(6, h.valid ? r.fz - h.fz : 0.0);
+      put(7, h.valid ? h.moved : 0.0);
+      put(8, h.valid ? h.departed : 0.0);
+      put(10, fit.n >= 3 ? std::abs(fit.w) * std::sqrt(rx * rx + ry * ry) * inv : 0.0);
+      put(kSlipFeatureReasons, static_cast<double>(why));
+      put(18, was ? 1.0 : 0.0);
+      put(22, ft);
+      put(23, align);
+      put(24, h.valid ? h.moved2 : 0.0);
+      put(25, h.valid ? h.dfz : 0.0);
+      column_of[i] = static_cast<std::uint8_t>(n++);
       has_feats[i] = true;
       if (why != 0) ++n_field_slipping;
     }
@@ -444,36 +612,45 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
   }
   if (!learn) return;
 
-  // The learned detector: the share of the contact the field detector decided slipping, now and
-  // in the last frame, completes the signals; then the model decides each element.
+  // The learned detector: the fingertip's signals complete the columns (the share of the contact
+  // the field detector decided slipping, now and in the last frame, among them); then the model
+  // decides each element.
   const double share = n_measured > 0 ? static_cast<double>(n_field_slipping) / n_measured : 0.0;
   const double share_prev = share_slipping_[f];
   share_slipping_[f] = share;
+  const std::pair<std::size_t, double> fingertip[] = {
+      {9, out.rigid_mm * inv},
+      {11, arm.speed_mps * 1e3},
+      {12, arm.yaw_rate_rps * (180.0 / 3.14159265358979323846)},
+      {13, n_measured > 0 ? static_cast<double>(n_moved) / n_measured : 0.0},
+      {14, n_measured > 0 ? static_cast<double>(n_departed) / n_measured : 0.0},
+      {15, total_fz},
+      {16, (total_fz - last_total_fz) / std::max(last_total_fz, 0.01)},
+      {19, static_cast<double>(n_measured)},
+      {20, thr * 1e3},
+      {21, mu},
+      {26, arm.speed_mps * 1e3 * period * inv},
+      {27, period > 0 ? 1.0 / period : 0.0},
+      {28, share},
+      {29, share_prev},
+  };
+  static_assert(std::size(fingertip) == kSlipFeatures - 16, "16 signals are the element's own");
+  for (const auto& [k, v] : fingertip)
+    std::fill_n(columns[k].begin(), n, finite_signal(v));
   if (kSlipModel.trees == 0) return;
-  // The model over every element at once (score_batch).
-  std::size_t n = 0;
+  model_scores(columns, n, score_);
   for (std::size_t i = 0; i < count; ++i) {
     if (!has_feats[i]) continue;
-    SlipFeatures& x = feats[i];
-    x[kSlipFeatures - 2] = static_cast<float>(share);
-    x[kSlipFeatures - 1] = static_cast<float>(share_prev);
-    for (std::size_t k = 0; k < kSlipFeatures; ++k)
-      columns_[k][n] = x[k];
-    ++n;
-  }
-  score_batch(columns_, n, score_.data(), leaf_.data());
-  std::size_t e = 0;
-  for (std::size_t i = 0; i < count; ++i) {
-    if (!has_feats[i]) continue;
-    const SlipFeatures& x = feats[i];
-    const bool slides = score_[e++] > static_cast<float>(kSlipModel.decision);
+    const std::size_t e = column_of[i];
+    const bool slides = score_[e] > static_cast<float>(kSlipModel.decision);
     const std::uint8_t why = out.reasons[i];
     out.reasons[i] = slides ? (why != 0 ? why : kSlipLearned) : 0;
     if (slides) {
-      // x[0..2]: moved, departed and the surface's motion, in dr.
-      out.state[i] =
-          contact_moves || x[2] > 1.0f ? ElementSlipState::kSlip : ElementSlipState::kIncipient;
-      const double v = static_cast<double>(std::max({x[0], x[1], x[2]})) * thr;
+      // Signals 0-2: moved, departed and the surface's motion, in dr.
+      out.state[i] = contact_moves || columns[2][e] > 1.0f ? ElementSlipState::kSlip
+                                                           : ElementSlipState::kIncipient;
+      const double v =
+          static_cast<double>(std::max({columns[0][e], columns[1][e], columns[2][e]})) * thr;
       out.slip_mm[i] = std::isfinite(v) ? v : 0.0;
     } else {
       out.state[i] = ElementSlipState::kStick;

@@ -209,18 +209,18 @@ void RunScorer::add_measurement(std::size_t i, std::uint64_t frame,
   const control::FingertipSlip& run_slip = *decided[0];
   if (feature_log_ != nullptr) {
     (void)recorder_->update(i, measured_in, thr, arm);  // its signals, below
-    const auto& x = recorder_->features(i);
     const auto& has = recorder_->has_features(i);
     for (std::size_t k = 0; k < kElementsPerFingertip && k < readings.size(); ++k) {
       if (!has[k]) continue;
+      const control::SlipFeatures x = recorder_->features(i, k);
       const bool label = truth.elements[k].sliding;
       // moved, departed, surface (in dr) and the load (in mu): the first four signals; the
       // field rules' reasons (kSlipFeatureReasons), not the compiled-in model's decision, so
       // the rows do not depend on the model being replaced.
-      const bool easy = !label && x[k][control::kSlipFeatureReasons] == 0.0f && x[k][0] < 0.5f &&
-                        x[k][1] < 0.5f && x[k][2] < 0.5f && x[k][3] < 0.5f;
+      const bool easy = !label && x[control::kSlipFeatureReasons] == 0.0f && x[0] < 0.5f &&
+                        x[1] < 0.5f && x[2] < 0.5f && x[3] < 0.5f;
       if (easy && easy_seen_++ % kSlipFeatureEasyStride != 0) continue;
-      feature_log_->x.push_back(x[k]);
+      feature_log_->x.push_back(x);
       feature_log_->label.push_back(label ? 1 : 0);
       feature_log_->weight.push_back(easy ? static_cast<float>(kSlipFeatureEasyStride) : 1.0f);
     }

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -253,7 +254,7 @@ void expect_finite_on_every_input(SlipDetectorKind kind) {
       ASSERT_TRUE(std::isfinite(s.slip_mm[i])) << frame;
       ASSERT_LE(static_cast<int>(s.state[i]), static_cast<int>(ElementSlipState::kSlip));
       if (!det.has_features(f)[i]) continue;
-      for (float v : det.features(f)[i])
+      for (float v : det.features(f, i))
         ASSERT_TRUE(std::isfinite(v)) << frame;
     }
   }
@@ -305,15 +306,15 @@ TEST(LearnedDetector, DecidesEachElementByTheModelsScore) {
     tip.sync();
     const FingertipSlip& s = det.update(0, tip.in, kThr, ArmMotion{0.01, 0.0});
     const FingertipSlip& rules = field.update(0, tip.in, kThr, ArmMotion{0.01, 0.0});
-    const auto& x = det.features(0);
     for (std::size_t i = 0; i < tip.r.size(); ++i) {
       ASSERT_TRUE(det.has_features(0)[i]);
+      const SlipFeatures x = det.features(0, i);
       // The field rules' reasons, not the model's: slip_train's rows do not depend on the model.
-      ASSERT_EQ(x[i][kSlipFeatureReasons], static_cast<float>(rules.reasons[i]))
+      ASSERT_EQ(x[kSlipFeatureReasons], static_cast<float>(rules.reasons[i]))
           << "frame " << frame << " element " << i;
-      for (float v : x[i])
+      for (float v : x)
         ASSERT_TRUE(std::isfinite(v));
-      const bool model = SlipDetector::model_score(x[i]) > SlipDetector::model_decision();
+      const bool model = SlipDetector::model_score(x) > SlipDetector::model_decision();
       ASSERT_EQ(slipping(s.state[i]), model) << "frame " << frame << " element " << i;
       ASSERT_EQ(s.reasons[i] != 0, model);
       ++decided;
@@ -343,6 +344,60 @@ TEST(LearnedDetector, NoSignalsWithoutADisplacement) {
 
 TEST(LearnedDetector, FiniteOnEveryInput) {
   expect_finite_on_every_input(SlipDetectorKind::kLearned);
+}
+
+// The frame's elements scored at once, by the vector path (AVX2 where the processor has it) and
+// by the portable loop, give model_score's scores to the bit, whatever the count of elements:
+// values on the model's usual thresholds (0, 1, ninths, small integers), beyond every threshold
+// and NaN among them.
+TEST(LearnedDetector, EveryScoringPathGivesTheModelsScoresExactly) {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+  EXPECT_STREQ(SlipDetector::model_scoring(), __builtin_cpu_supports("avx2") ? "avx2" : "portable");
+#endif
+  std::mt19937_64 rng(11);
+  std::normal_distribution<float> normal(0.0f, 1.0f);
+  std::uniform_int_distribution<int> kind(0, 9), small(0, 30);
+  const auto value = [&]() -> float {
+    switch (kind(rng)) {
+      case 0:
+        return 0.0f;
+      case 1:
+        return static_cast<float>(small(rng)) / 9.0f;
+      case 2:
+        return static_cast<float>(small(rng));
+      case 3:
+        return kind(rng) < 5 ? std::numeric_limits<float>::infinity()
+                             : -std::numeric_limits<float>::infinity();
+      case 4:
+        return std::numeric_limits<float>::quiet_NaN();
+      default:
+        return normal(rng) * (kind(rng) < 5 ? 0.01f : 2.0f);
+    }
+  };
+  std::size_t compared = 0;
+  for (int draw = 0; draw < 40; ++draw) {
+    SlipColumns columns{};
+    for (auto& column : columns)
+      for (float& v : column)
+        v = value();
+    for (std::size_t n : {0, 1, 7, 8, 9, 31, 32, 33, 41, 63, 64}) {
+      std::array<float, kMaxSlipElements> vector{}, portable{};
+      SlipDetector::model_scores(columns, n, vector, ModelScoring::kVector);
+      SlipDetector::model_scores(columns, n, portable, ModelScoring::kPortable);
+      for (std::size_t e = 0; e < n; ++e) {
+        SlipFeatures x{};
+        for (std::size_t k = 0; k < kSlipFeatures; ++k)
+          x[k] = columns[k][e];
+        const auto expected = static_cast<float>(SlipDetector::model_score(x));
+        ASSERT_EQ(std::bit_cast<std::uint32_t>(vector[e]), std::bit_cast<std::uint32_t>(expected))
+            << "draw " << draw << ", " << n << " elements, element " << e;
+        ASSERT_EQ(std::bit_cast<std::uint32_t>(portable[e]), std::bit_cast<std::uint32_t>(expected))
+            << "draw " << draw << ", " << n << " elements, element " << e;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 40U * (1 + 7 + 8 + 9 + 31 + 32 + 33 + 41 + 63 + 64));
 }
 
 }  // namespace

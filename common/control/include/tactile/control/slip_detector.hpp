@@ -82,6 +82,13 @@ using SlipFeatures = std::array<float, kSlipFeatures>;
 // The signal that holds the field rules' reasons (kSlip* bits) for the element.
 inline constexpr std::size_t kSlipFeatureReasons = 17;
 
+// The signals of up to kMaxSlipElements elements by column (signal k of element e at [k][e]).
+using SlipColumns = std::array<std::array<float, kMaxSlipElements>, kSlipFeatures>;
+
+// How the model scores a frame's elements: with the processor's vector instructions where it has
+// them (AVX2 on x86-64), or the portable loop. Both give model_score's scores exactly.
+enum class ModelScoring : std::uint8_t { kVector, kPortable };
+
 // One fingertip's decisions on its latest fresh frame.
 struct FingertipSlip {
   std::array<ElementSlipState, kMaxSlipElements> state{};
@@ -116,18 +123,23 @@ class SlipDetector {
   const FingertipSlip& update(std::size_t fingertip, const FingertipInput& in, double threshold_mm,
                               const ArmMotion& arm) noexcept;
   const FingertipSlip& last(std::size_t fingertip) const { return out_[fingertip]; }
-  // The learned detector's signals of the latest fresh frame of `fingertip`; `has_features`
-  // tells which elements have them (kind learned only; otherwise none has).
-  const std::array<SlipFeatures, kMaxSlipElements>& features(std::size_t fingertip) const {
-    return features_[fingertip];
-  }
+  // Which elements of the latest fresh frame of `fingertip` have the learned detector's signals
+  // (kind learned only; otherwise none has), and one element's signals (all 0 where it has none).
   const std::array<bool, kMaxSlipElements>& has_features(std::size_t fingertip) const {
     return has_features_[fingertip];
   }
+  SlipFeatures features(std::size_t fingertip, std::size_t element) const noexcept;
   // The compiled-in model's score for `x` (the log-odds of slip) and its decision level: the
   // learned detector decides slip when score > decision.
   static double model_score(const SlipFeatures& x) noexcept;
   static double model_decision() noexcept;
+  // model_score of the first `n` elements of `columns` at once, into score[0, n): what the learned
+  // detector runs on each frame. kVector falls back to the portable loop where the processor has
+  // no vector path; model_scoring() names the one kVector uses ("avx2" or "portable").
+  static void model_scores(const SlipColumns& columns, std::size_t n,
+                           std::array<float, kMaxSlipElements>& score,
+                           ModelScoring scoring = ModelScoring::kVector) noexcept;
+  static const char* model_scoring() noexcept;
   // Trees in the compiled-in model (0: none trained; learned then decides as field).
   static std::size_t model_trees() noexcept;
 
@@ -168,12 +180,12 @@ class SlipDetector {
   std::array<std::int64_t, kFingertips> last_ts_ns_{};
   std::array<double, kFingertips> period_s_{};
   std::array<double, kFingertips> share_slipping_{};
-  // Scratch of the learned detector's batch evaluation (one frame).
-  std::array<std::array<float, kMaxSlipElements>, kSlipFeatures> columns_{};
-  std::array<float, kMaxSlipElements> score_{};
-  std::array<std::uint32_t, kMaxSlipElements> leaf_{};
-  std::array<std::array<SlipFeatures, kMaxSlipElements>, kFingertips> features_{};
+  // The learned detector's signals of each fingertip's last fresh frame, by column: the elements
+  // that have them in order (column_of_), and their scores (scratch of one frame).
+  std::array<SlipColumns, kFingertips> columns_{};
+  std::array<std::array<std::uint8_t, kMaxSlipElements>, kFingertips> column_of_{};
   std::array<std::array<bool, kMaxSlipElements>, kFingertips> has_features_{};
+  std::array<float, kMaxSlipElements> score_{};
 };
 
 }  // namespace tactile::control
