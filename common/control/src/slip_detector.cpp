@@ -115,6 +115,8 @@ void score_portable(const SlipColumns& columns, std::size_t n, float* score) noe
 #define TACTILE_AVX2 __attribute__((target("avx2")))
 
 constexpr std::size_t kSplits = kSlipModel.trees * kSlipModel.depth;
+// Trees whose leaf indices the AVX2 scoring holds at once (4 KB).
+constexpr std::size_t kTreeChunk = 64;
 
 // The model's thresholds by signal, at compile time: each signal's distinct thresholds in
 // ascending order, and each split's rank among its signal's. With an element's count of a
@@ -187,6 +189,28 @@ TACTILE_AVX2 void count_thresholds_avx2(const SlipColumns& columns, std::size_t 
   }
 }
 
+// Pass 3 for `B` blocks of 8 elements from block `b`: trees [first, first + trees) of the chunk
+// whose leaf indices `leaf` holds, added to `score` tree by tree. The blocks' sums are independent
+// chains, so the gathers of one tree overlap.
+template <std::size_t B>
+TACTILE_AVX2 void sum_leaves_avx2(const std::uint8_t (&leaf)[kTreeChunk][kMaxSlipElements],
+                                  std::size_t first, std::size_t trees, std::size_t b,
+                                  float* score) noexcept {
+  __m256 sum[B];
+  for (std::size_t q = 0; q < B; ++q)
+    sum[q] = _mm256_loadu_ps(score + 8 * (b + q));
+  for (std::size_t t = 0; t < trees; ++t) {
+    const float* leaves = &kSlipModelLeaf[(first + t) << kSlipModel.depth];
+    for (std::size_t q = 0; q < B; ++q) {
+      const __m256i index = _mm256_cvtepu8_epi32(
+          _mm_loadl_epi64(reinterpret_cast<const __m128i*>(leaf[t] + 8 * (b + q))));
+      sum[q] = _mm256_add_ps(sum[q], _mm256_i32gather_ps(leaves, index, 4));
+    }
+  }
+  for (std::size_t q = 0; q < B; ++q)
+    _mm256_storeu_ps(score + 8 * (b + q), sum[q]);
+}
+
 // The same scores in AVX2, compiled by function attribute only (the build has no -mavx2) and used
 // only where the processor has it. Three passes over the frame's elements, 32 at a time in bytes
 // where they can be:
@@ -214,14 +238,13 @@ TACTILE_AVX2 void score_avx2(const SlipColumns& columns, std::size_t n, float* s
         break;
     }
   }
-  // Passes 2 and 3 by chunks of trees (each chunk's leaf indices take 4 KB).
-  constexpr std::size_t kChunk = 64;
-  alignas(32) std::uint8_t leaf[kChunk][kMaxSlipElements];
+  // Passes 2 and 3 by chunks of trees.
+  alignas(32) std::uint8_t leaf[kTreeChunk][kMaxSlipElements];
   const std::size_t blocks = (n + 7) / 8;
   for (std::size_t b = 0; b < blocks; ++b)
     _mm256_storeu_ps(score + 8 * b, _mm256_set1_ps(static_cast<float>(kSlipModel.base)));
-  for (std::size_t first = 0; first < kSlipModel.trees; first += kChunk) {
-    const std::size_t trees = std::min(kChunk, kSlipModel.trees - first);
+  for (std::size_t first = 0; first < kSlipModel.trees; first += kTreeChunk) {
+    const std::size_t trees = std::min(kTreeChunk, kSlipModel.trees - first);
     for (std::size_t t = 0; t < trees; ++t) {
       for (std::size_t h = 0; h < halves; ++h) {
         // Bit d of the index is split d's answer: from the last split to the first, the index
@@ -237,15 +260,21 @@ TACTILE_AVX2 void score_avx2(const SlipColumns& columns, std::size_t n, float* s
         _mm256_store_si256(reinterpret_cast<__m256i*>(leaf[t] + 32 * h), index);
       }
     }
-    for (std::size_t b = 0; b < blocks; ++b) {
-      __m256 sum = _mm256_loadu_ps(score + 8 * b);
-      for (std::size_t t = 0; t < trees; ++t) {
-        const __m256i index = _mm256_cvtepu8_epi32(
-            _mm_loadl_epi64(reinterpret_cast<const __m128i*>(leaf[t] + 8 * b)));
-        sum = _mm256_add_ps(sum,
-                            _mm256_i32gather_ps(&kSlipModelLeaf[(first + t) << kDepth], index, 4));
-      }
-      _mm256_storeu_ps(score + 8 * b, sum);
+    std::size_t b = 0;
+    for (; b + 4 <= blocks; b += 4)
+      sum_leaves_avx2<4>(leaf, first, trees, b, score);
+    switch (blocks - b) {
+      case 3:
+        sum_leaves_avx2<3>(leaf, first, trees, b, score);
+        break;
+      case 2:
+        sum_leaves_avx2<2>(leaf, first, trees, b, score);
+        break;
+      case 1:
+        sum_leaves_avx2<1>(leaf, first, trees, b, score);
+        break;
+      default:
+        break;
     }
   }
 }
