@@ -85,8 +85,8 @@ int main(int argc, char** argv) {
   std::optional<double> decision_level;
   std::string controller = "field";
   rig::train::BoostParams params;
-  params.trees = 48;
-  params.depth = 5;
+  params.trees = 64;
+  params.depth = 7;
   params.learning_rate = 0.25;
   std::string log_level = "info";
   CLI::App app{
