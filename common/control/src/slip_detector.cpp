@@ -4,7 +4,6 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
-#include <utility>
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #include <immintrin.h>
@@ -38,6 +37,26 @@ inline float finite_signal(double v) {
   const auto x = static_cast<float>(v);
   return std::isfinite(x) ? x : 0.0f;
 }
+
+// The learned detector's signals (kSlipFeatureNames' indices) that are each element's own, and
+// those that are the fingertip's, the same for every element of a frame (written once per frame):
+// each signal in exactly one of them, in the order decide_field computes them.
+constexpr std::array<std::size_t, 16> kElementSignals{0, 1,  2,  3,  4,  5,  6,  7,
+                                                      8, 10, 17, 18, 22, 23, 24, 25};
+constexpr std::array<std::size_t, 14> kFingertipSignals{9,  11, 12, 13, 14, 15, 16,
+                                                        19, 20, 21, 26, 27, 28, 29};
+
+constexpr bool each_signal_once() {
+  std::array<int, kSlipFeatures> seen{};
+  for (std::size_t k : kElementSignals)
+    ++seen[k];
+  for (std::size_t k : kFingertipSignals)
+    ++seen[k];
+  for (int times : seen)
+    if (times != 1) return false;
+  return kElementSignals[10] == kSlipFeatureReasons;
+}
+static_assert(each_signal_once(), "every signal is the element's or the fingertip's, once");
 
 std::size_t element_count(const FingertipInput& in) {
   return std::min(in.elements.size(), kMaxSlipElements);
@@ -165,8 +184,9 @@ static_assert(kRanks.most <= 255, "a signal's count of thresholds must fit in a 
 // Pass 1 for `Q` blocks of 8 elements from `first` (a multiple of 32): each signal's count of
 // thresholds below each element's value, minus 128, in signed bytes (the blocks past Q count 0).
 template <std::size_t Q>
-TACTILE_AVX2 void count_thresholds_avx2(const SlipColumns& columns, std::size_t first,
-                                        std::int8_t (&count)[kSlipFeatures][kMaxSlipElements]) {
+TACTILE_AVX2 void count_thresholds_avx2(
+    const SlipColumns& columns, std::size_t first,
+    std::int8_t (&count)[kSlipFeatures][kMaxSlipElements]) noexcept {
   for (std::size_t k = 0; k < kSlipFeatures; ++k) {
     if (kRanks.begin[k] == kRanks.begin[k + 1]) continue;  // no split on it
     const float* column = columns[k].data() + first;
@@ -598,23 +618,27 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
       const double align =
           moved > 0 && rigid > 0 ? (r.dx_mm * fit.tx + r.dy_mm * fit.ty) / (moved * rigid) : 0.0;
       const double m = mu > 0 ? 1.0 / mu : 0.0;
-      const auto put = [&](std::size_t k, double v) { columns[k][n] = finite_signal(v); };
-      put(0, moved * inv);
-      put(1, departed * inv);
-      put(2, surface * inv);
-      put(3, ratio * m);
-      put(4, h.valid ? h.ratio * m : 0.0);
-      put(5, r.fz);
-      put(6, h.valid ? r.fz - h.fz : 0.0);
-      put(7, h.valid ? h.moved : 0.0);
-      put(8, h.valid ? h.departed : 0.0);
-      put(10, fit.n >= 3 ? std::abs(fit.w) * std::sqrt(rx * rx + ry * ry) * inv : 0.0);
-      put(kSlipFeatureReasons, static_cast<double>(why));
-      put(18, was ? 1.0 : 0.0);
-      put(22, ft);
-      put(23, align);
-      put(24, h.valid ? h.moved2 : 0.0);
-      put(25, h.valid ? h.dfz : 0.0);
+      const double own[] = {
+          moved * inv,                  // moved_dr
+          departed * inv,               // departed_dr
+          surface * inv,                // surface_dr
+          ratio * m,                    // load
+          h.valid ? h.ratio * m : 0.0,  // load_prev
+          r.fz,                         // fz_n
+          h.valid ? r.fz - h.fz : 0.0,  // dfz_n
+          h.valid ? h.moved : 0.0,      // moved_prev_dr
+          h.valid ? h.departed : 0.0,   // departed_prev_dr
+          fit.n >= 3 ? std::abs(fit.w) * std::sqrt(rx * rx + ry * ry) * inv : 0.0,  // rotation_dr
+          static_cast<double>(why),                                                 // field_reasons
+          was ? 1.0 : 0.0,                                                          // field_was
+          ft,                                                                       // ft_n
+          align,                                                                    // align
+          h.valid ? h.moved2 : 0.0,  // moved_prev2_dr
+          h.valid ? h.dfz : 0.0,     // dfz_prev_n
+      };
+      static_assert(std::size(own) == kElementSignals.size());
+      for (std::size_t j = 0; j < kElementSignals.size(); ++j)
+        columns[kElementSignals[j]][n] = finite_signal(own[j]);
       column_of[i] = static_cast<std::uint8_t>(n++);
       has_feats[i] = true;
       if (why != 0) ++n_field_slipping;
@@ -647,25 +671,25 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
   const double share = n_measured > 0 ? static_cast<double>(n_field_slipping) / n_measured : 0.0;
   const double share_prev = share_slipping_[f];
   share_slipping_[f] = share;
-  const std::pair<std::size_t, double> fingertip[] = {
-      {9, out.rigid_mm * inv},
-      {11, arm.speed_mps * 1e3},
-      {12, arm.yaw_rate_rps * (180.0 / 3.14159265358979323846)},
-      {13, n_measured > 0 ? static_cast<double>(n_moved) / n_measured : 0.0},
-      {14, n_measured > 0 ? static_cast<double>(n_departed) / n_measured : 0.0},
-      {15, total_fz},
-      {16, (total_fz - last_total_fz) / std::max(last_total_fz, 0.01)},
-      {19, static_cast<double>(n_measured)},
-      {20, thr * 1e3},
-      {21, mu},
-      {26, arm.speed_mps * 1e3 * period * inv},
-      {27, period > 0 ? 1.0 / period : 0.0},
-      {28, share},
-      {29, share_prev},
+  const double fingertip[] = {
+      out.rigid_mm * inv,                                                   // rigid_dr
+      arm.speed_mps * 1e3,                                                  // arm_speed_mmps
+      arm.yaw_rate_rps * (180.0 / 3.14159265358979323846),                  // arm_yaw_dps
+      n_measured > 0 ? static_cast<double>(n_moved) / n_measured : 0.0,     // share_moved
+      n_measured > 0 ? static_cast<double>(n_departed) / n_measured : 0.0,  // share_departed
+      total_fz,                                                             // total_fz_n
+      (total_fz - last_total_fz) / std::max(last_total_fz, 0.01),           // total_dfz_rel
+      static_cast<double>(n_measured),                                      // measured
+      thr * 1e3,                                                            // dr_um
+      mu,                                                                   // mu
+      arm.speed_mps * 1e3 * period * inv,                                   // arm_dr
+      period > 0 ? 1.0 / period : 0.0,                                      // fps
+      share,                                                                // share_slipping
+      share_prev,                                                           // share_slipping_prev
   };
-  static_assert(std::size(fingertip) == kSlipFeatures - 16, "16 signals are the element's own");
-  for (const auto& [k, v] : fingertip)
-    std::fill_n(columns[k].begin(), n, finite_signal(v));
+  static_assert(std::size(fingertip) == kFingertipSignals.size());
+  for (std::size_t j = 0; j < kFingertipSignals.size(); ++j)
+    std::fill_n(columns[kFingertipSignals[j]].begin(), n, finite_signal(fingertip[j]));
   if (kSlipModel.trees == 0) return;
   model_scores(columns, n, score_);
   for (std::size_t i = 0; i < count; ++i) {
