@@ -12,6 +12,7 @@
 #include "tactile/control/controller.hpp"
 #include "tactile/extractor.hpp"
 #include "tactile/rig/control_link.hpp"
+#include "tactile/rig/scenario_run.hpp"
 #include "tactile/rig/scoring.hpp"
 #include "tactile/rig/sensors.hpp"
 #include "tactile/rig/world.hpp"
@@ -99,43 +100,20 @@ void SlipScorer::finish(SlipMetrics& out) {
   out.detector = detector;
 }
 
-const char* scenario_case(const WorldParams& w) {
-  if (w.cap.held_to_table) return "cap_held";
-  if (w.bottle.displaced_x_m != 0 || w.bottle.displaced_y_m != 0) return "bottle_displaced";
-  return "normal";
-}
-
-void judge_negative_case(Report& r) {
-  if (r.scenario_case == "bottle_displaced") {
-    r.negative_case_passed = !r.release_classified && !r.opened_in_air;
-  } else if (r.scenario_case == "cap_held") {
-    r.negative_case_passed = r.grasp_classified != "grasp";
-  } else {
-    r.negative_case_passed.reset();
-  }
-}
-
 LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
   LockstepResult result;
-  Report& rep = result.report;
-  rep.seed = sc.seed;
-  rep.scenario_case = scenario_case(sc.world);
-
-  const control::Config cfg = scenario_controller_config(sc);
-  rep.hold = hold_need(sc.world, cfg.f2_n);
-  World world(sc.world);
+  // Only the measurement sees these images, and it reads only the disks: no live background.
+  CameraParams camera = sc.camera;
+  camera.live_background = false;
+  ScenarioRun run(sc, camera, result, opt.record_series);
+  if (opt.slip_features != nullptr) run.scorer().log_features(opt.slip_features);
   const int steps =
       opt.dt_s > 0 ? std::max(1, static_cast<int>(std::lround(1.0 / (sc.camera.fps * opt.dt_s))))
                    : sc.steps_per_frame();
   const double dt = 1.0 / (sc.camera.fps * steps);
-  rep.physics_step_s = dt;
+  result.report.physics_step_s = dt;
 
-  const auto normals = world.element_normals();
-  // Only the measurement sees these images, and it reads only the disks: no live background.
-  CameraParams camera = sc.camera;
-  camera.live_background = false;
-  SimulatedSensors sensors(sc, camera, normals);
-  result.calibrations = sensors.calibrations();
+  const auto normals = run.world().element_normals();
   std::vector<Extractor> extractors;
   for (std::size_t i = 0; i < kFingertips; ++i) {
     ExtractorOptions eo;
@@ -148,92 +126,54 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
     extractors[i].begin_reference();
     ReferenceResult r{};
     for (int k = 0; k < sc.optics.reference_frames; ++k)
-      r = extractors[i].add_reference_frame(sensors.render(i, FingertipTruth{}).view());
+      r = extractors[i].add_reference_frame(run.sensors().render(i, FingertipTruth{}).view());
     if (r.status != ReferenceStatus::kComplete) {
       throw std::runtime_error(std::string("lockstep: no-load reference refused: ") +
                                to_string(r.status));
     }
   }
 
-  control::GraspMoveTwistController controller(cfg);
-  control::ArmMotionEstimator arm_motion;
+  control::GraspMoveTwistController controller(run.config());
   control::Phase phase = control::Phase::kIdle;
-  bool done_seen = false;
-  double done_at = 0;
-  double dropped_at = -1;
-  RunScorer scorer(result, cfg, opt.record_series);
-  if (opt.slip_features != nullptr) scorer.log_features(opt.slip_features);
-  const Vec3 transport = transport_direction(sc.world);
-
   std::uint64_t frame = 0;
-  const auto max_frames = static_cast<std::uint64_t>(std::ceil(sc.max_time_s * sc.camera.fps));
-  rep.end_reason = "max_time";
-  while (frame < max_frames) {
-    bool finite = true;
-    for (int s = 0; s < steps && finite; ++s)
-      finite = world.step(dt);
-    if (!finite) {
-      result.physics_finite = false;
-      rep.end_reason = "physics";
-      break;
-    }
+  do {
+    if (!run.step(steps, dt)) break;
     ++frame;
     const double t = static_cast<double>(frame) / sc.camera.fps;
-    const GroundTruth& gt = sensors.truth().take(world, frame, slip_threshold_mm(cfg, phase));
+    const GroundTruth& gt = run.take_truth(frame, phase);
 
     // Render and measure both fingertips.
-    std::array<control::FingertipInput, control::kFingertips> tips{};
-    for (std::size_t i = 0; i < kFingertips; ++i) {
-      extractors[i].measure(sensors.render(i, gt.fingertips[i]).view(),
-                            {frame, static_cast<std::int64_t>(std::llround(t * 1e9))});
-      tips[i].elements = extractors[i].readings();
-      tips[i].normals = normals;
-      tips[i].sequence = frame;
-      tips[i].camera_timestamp_ns = std::llround(t * 1e9);
-      tips[i].fresh = true;
-      tips[i].stale = false;
-    }
     control::ControllerInput in{};
-    in.fingertips = tips;
-    in.arm.wrist.position_m = world.arm().position_m;
-    in.arm.wrist.yaw_rad = world.arm().yaw_rad;
-    in.arm.active_segment_id = world.arm().active_segment_id;
-    in.arm.segment_done = world.arm().segment_done;
-    in.arm.holding = world.arm().holding;
-    for (std::size_t i = 0; i < kFingertips; ++i)
-      in.arm.fingertip_position_m[i] = world.fingertip(i).offset_w;
+    for (std::size_t i = 0; i < kFingertips; ++i) {
+      extractors[i].measure(run.sensors().render(i, gt.fingertips[i]).view(),
+                            {frame, static_cast<std::int64_t>(std::llround(t * 1e9))});
+      control::FingertipInput& tip = in.fingertips[i];
+      tip.elements = extractors[i].readings();
+      tip.normals = normals;
+      tip.sequence = frame;
+      tip.camera_timestamp_ns = std::llround(t * 1e9);
+      tip.fresh = true;
+      tip.stale = false;
+    }
+    in.arm = arm_feedback(run.world());
     in.now_s = t;
     const control::ControllerOutput out = controller.update(in);
     // The arm's motion as the controller saw it, for the scorer's detectors.
-    const control::ArmMotion arm = arm_motion.update(in.arm.wrist, in.now_s);
+    const control::ArmMotion arm = run.arm_motion(in.now_s);
 
-    scorer.add_truth(frame, t, gt, {out.phase, out.twist_cycle}, frame_pose(world, transport));
+    run.score_truth(frame, t, gt, {out.phase, out.twist_cycle});
     for (std::size_t i = 0; i < kFingertips; ++i)
-      scorer.add_measurement(i, frame, extractors[i].readings(), gt.fingertips[i], phase, arm);
+      run.scorer().add_measurement(i, frame, extractors[i].readings(), gt.fingertips[i], phase,
+                                   arm);
     for (const control::Event& e : out.events)
-      scorer.add_event(e, t);
+      run.scorer().add_event(e, t);
 
-    // A drop by command: the fingers told to open with nothing under the cap.
-    if (out.command.kind == control::CommandKind::kOpen && world.cap().place == CapPlace::kFree)
-      rep.opened_in_air = true;
-    world.apply(to_world_command(out.command));
+    run.apply(out.command);
     phase = out.phase;
-    if (gt.dropped && dropped_at < 0) dropped_at = t;
+    if (controller.done()) run.task_ended(t);
+  } while (!run.ended_after_frame(frame, static_cast<double>(frame) / sc.camera.fps));
 
-    if (controller.done() && !done_seen) {
-      done_seen = true;
-      done_at = t;
-      if (rep.completed) rep.end_reason = "done";
-    }
-    if (done_seen && t - done_at >= sc.settle_after_done_s) break;
-    if (dropped_at >= 0 && t - dropped_at >= 0.5) {
-      rep.end_reason = "dropped";
-      break;
-    }
-  }
-
-  scorer.finish(world.cap().dropped, static_cast<double>(frame) / sc.camera.fps, frame);
-  judge_negative_case(rep);
+  run.finish(static_cast<double>(frame) / sc.camera.fps, frame);
   return result;
 }
 

@@ -1,20 +1,22 @@
 #include "tactile/rig/arm_link.hpp"
 
+#include "tactile/rig/scenario_run.hpp"
+
 namespace tactile::rig {
 
 wire::ArmStateData arm_state_of(const World& world, std::int64_t time_ns,
                                 std::uint64_t last_command_sequence) {
+  // What the lockstep runner's controller sees too (arm_feedback), plus what only the wire has.
+  const control::ArmFeedback f = arm_feedback(world);
   wire::ArmStateData s;
-  const rig::ArmState& arm = world.arm();
   s.time_ns = time_ns;
-  s.wrist = {arm.position_m, arm.yaw_rad};
-  for (std::size_t i = 0; i < kFingertips; ++i) {
-    s.fingertip_position_m[i] = world.fingertip(i).offset_w;
+  s.wrist = f.wrist;
+  s.fingertip_position_m = f.fingertip_position_m;
+  for (std::size_t i = 0; i < kFingertips; ++i)
     s.fingertip_velocity_mps[i] = world.fingertip(i).velocity_f;
-  }
-  s.active_segment_id = arm.active_segment_id;
-  s.segment_done = arm.segment_done;
-  s.holding = arm.holding || arm.stopped;
+  s.active_segment_id = f.active_segment_id;
+  s.segment_done = f.segment_done;
+  s.holding = f.holding;
   s.last_command_sequence = last_command_sequence;
   return s;
 }

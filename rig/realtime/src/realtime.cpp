@@ -20,6 +20,7 @@
 #include "tactile/rig/arm_link.hpp"
 #include "tactile/rig/control_link.hpp"
 #include "tactile/rig/optics.hpp"
+#include "tactile/rig/scenario_run.hpp"
 #include "tactile/rig/scoring.hpp"
 #include "tactile/rig/sensors.hpp"
 #include "tactile/rig/truth.hpp"
@@ -180,10 +181,6 @@ class RealtimeRun final : private arm::ArmBackend {
   RealtimeResult run();
 
  private:
-  static LockstepResult& with_calibrations(LockstepResult& run, const SimulatedSensors& sensors) {
-    run.calibrations = sensors.calibrations();
-    return run;
-  }
   void advance_to(std::int64_t t_ns);
   // arm::ArmBackend.
   wire::ArmStateData read(std::int64_t now_ns) override;
@@ -207,24 +204,20 @@ class RealtimeRun final : private arm::ArmBackend {
   bool ended_after_frame(std::int64_t now_ns);
   void finish();
 
-  const Scenario& sc_;
   const RealtimeOptions& opt_;
   RealtimeResult result_;
   RealtimeCounters& c_ = result_.counters;
   Report& rep_ = result_.run.report;
-  const control::Config cfg_;
-  World world_;
   const double dt_;
   const std::int64_t period_ns_;
   const std::int64_t lead_ns_;
   CameraParams cam_;
-  SimulatedSensors sensors_;
+  // The world, sensors, truth, scorer and end rules, as the lockstep runner has them.
+  ScenarioRun run_;
   // Before the cameras: their threads push into it until they are destroyed.
   std::array<SentQueue, kFingertips> sent_;
   std::array<std::uint64_t, kFingertips> newest_sent_{};  // the newest frame each camera sent
   std::vector<std::unique_ptr<camera::FakeGvCamera>> cameras_;
-  RunScorer scorer_;
-  const Vec3 transport_;
 
   zmq::context_t ctx_;
   arm::ArmServer arm_;
@@ -243,15 +236,11 @@ class RealtimeRun final : private arm::ArmBackend {
   std::string out_;
   std::array<wire::ReceivedFrame, kFingertips> measured_;
   std::deque<KeptTruth> kept_;
-  control::ArmMotionEstimator arm_motion_;
   std::vector<double> latencies_ms_;
 
   std::int64_t start_ns_ = 0;
   control::Phase phase_ = control::Phase::kIdle;
   std::uint32_t twist_cycle_ = 0;
-  bool ended_ = false;
-  std::int64_t ended_at_ns_ = 0;
-  std::int64_t dropped_at_ns_ = -1;
   std::uint64_t frame_ = 0;
   std::uint64_t first_frame_ = 0;
 };
@@ -272,17 +261,12 @@ CameraParams realtime_camera(const Scenario& sc, const RealtimeOptions& opt) {
 }
 
 RealtimeRun::RealtimeRun(const Scenario& sc, const RealtimeOptions& opt)
-    : sc_(sc),
-      opt_(opt),
-      cfg_(scenario_controller_config(sc)),
-      world_(sc.world),
+    : opt_(opt),
       dt_(sc.step_s()),
       period_ns_(static_cast<std::int64_t>(std::llround(1e9 / sc.camera.fps))),
       lead_ns_(std::min(static_cast<std::int64_t>(opt.render_lead_s * 1e9), period_ns_ * 3 / 4)),
       cam_(realtime_camera(sc, opt)),
-      sensors_(sc, cam_, world_.element_normals()),
-      scorer_(with_calibrations(result_.run, sensors_), cfg_, opt.record_series),
-      transport_(transport_direction(sc.world)),
+      run_(sc, cam_, result_.run, opt.record_series),
       arm_(ctx_, arm_server_options(opt), *this),
       frames_(ctx_, opt.observe_frames, {wire::kFrameTopicPrefix},
               opt.observe_security ? &*opt.observe_security : nullptr) {
@@ -335,17 +319,11 @@ RealtimeRun::RealtimeRun(const Scenario& sc, const RealtimeOptions& opt)
 
 // Steps the world until its clock reaches the wall-clock instant `t_ns`.
 void RealtimeRun::advance_to(std::int64_t t_ns) {
-  const double target = static_cast<double>(t_ns - start_ns_) * 1e-9;
-  while (world_.time() + 0.5 * dt_ < target) {
-    if (!world_.step(dt_)) {
-      result_.run.physics_finite = false;
-      break;
-    }
-  }
+  run_.advance_to(static_cast<double>(t_ns - start_ns_) * 1e-9, dt_);
 }
 
 wire::ArmStateData RealtimeRun::read(std::int64_t now_ns) {
-  return arm_state_of(world_, now_ns, 0);  // the server fills in the last command's sequence
+  return arm_state_of(run_.world(), now_ns, 0);  // the server fills in the last command's sequence
 }
 
 bool RealtimeRun::write(const wire::ReceivedCommand& cmd, std::int64_t now_ns) {
@@ -362,12 +340,12 @@ bool RealtimeRun::write(const wire::ReceivedCommand& cmd, std::int64_t now_ns) {
     }
   }
   advance_to(now_ns);  // the command acts from the moment it arrived
-  return world_.apply(to_world_command(cmd.command));
+  return run_.apply(cmd.command);
 }
 
 void RealtimeRun::hold(std::int64_t now_ns) {
   advance_to(now_ns);  // the hold acts from the moment it was decided
-  world_.apply(to_world_command(control::Command::hold()));
+  run_.apply(control::Command::hold());
 }
 
 void RealtimeRun::on_frame() {
@@ -395,8 +373,8 @@ void RealtimeRun::on_frame() {
   }
   it->scored[tip] = true;
   ++c_.frames_scored;
-  scorer_.add_measurement(tip, it->frame - first_frame_, measured_[tip].elements,
-                          it->truth.fingertips[tip], it->phase, it->arm);
+  run_.scorer().add_measurement(tip, it->frame - first_frame_, measured_[tip].elements,
+                                it->truth.fingertips[tip], it->phase, it->arm);
 }
 
 void RealtimeRun::on_event() {
@@ -418,13 +396,8 @@ void RealtimeRun::on_event() {
   }
   ce.value = e.value();
   ce.text = e.text().c_str();  // copied by the scorer
-  scorer_.add_event(ce, t);
-  if (e.kind() == v1::EVENT_KIND_DONE || e.kind() == v1::EVENT_KIND_ABORTED) {
-    if (!ended_) {
-      ended_ = true;
-      ended_at_ns_ = util::realtime_ns();
-    }
-  }
+  run_.scorer().add_event(ce, t);
+  if (e.kind() == v1::EVENT_KIND_DONE || e.kind() == v1::EVENT_KIND_ABORTED) run_.task_ended(t);
 }
 
 void RealtimeRun::serve_until(std::int64_t render_ns) {
@@ -456,19 +429,19 @@ void RealtimeRun::render_frame(std::int64_t send_ns) {
   const std::int64_t started_ns = util::realtime_ns();
   advance_to(send_ns);
   const std::int64_t stepped_ns = util::realtime_ns();
-  const GroundTruth& gt = sensors_.truth().take(world_, frame_, slip_threshold_mm(cfg_, phase_));
+  const GroundTruth& gt = run_.take_truth(frame_, phase_);
   KeptTruth kt;
   kt.frame = frame_;
   kt.send_ns = send_ns;
-  kt.t = world_.time();
+  kt.t = run_.world().time();
   kt.phase = phase_;
-  kt.arm = arm_motion_.update({world_.arm().position_m, world_.arm().yaw_rad}, kt.t);
+  kt.arm = run_.arm_motion(kt.t);
   kt.truth = gt;
   kt.truth.twist_cycle = twist_cycle_;
   for (auto& ft : kt.truth.fingertips)
     ft.camera_timestamp_ns = send_ns;
   for (std::size_t i = 0; i < kFingertips; ++i) {
-    if (!cameras_[i]->publish(sensors_.render(i, gt.fingertips[i]).view(), frame_, send_ns)) {
+    if (!cameras_[i]->publish(run_.sensors().render(i, gt.fingertips[i]).view(), frame_, send_ns)) {
       util::log_warn("camera {}: a receiver set another format; frame not published",
                      kFingertipIds[i]);
     }
@@ -484,8 +457,7 @@ void RealtimeRun::render_frame(std::int64_t send_ns) {
         static_cast<double>(stepped_ns - started_ns) * 1e-6,
         static_cast<double>(published_ns - stepped_ns) * 1e-6);
   }
-  scorer_.add_truth(frame_ - first_frame_, kt.t, kt.truth, {phase_, twist_cycle_},
-                    frame_pose(world_, transport_));
+  run_.score_truth(frame_ - first_frame_, kt.t, kt.truth, {phase_, twist_cycle_});
   kept_.push_back(std::move(kt));
   while (kept_.size() > 64) {
     if (!kept_.front().published) publish_truth(kept_.front());
@@ -541,19 +513,9 @@ bool RealtimeRun::answer_arm(std::int64_t now_ns) {
 }
 
 bool RealtimeRun::ended_after_frame(std::int64_t now_ns) {
-  if (world_.cap().dropped && dropped_at_ns_ < 0) dropped_at_ns_ = now_ns;
-  if (ended_ && now_ns - ended_at_ns_ >= static_cast<std::int64_t>(sc_.settle_after_done_s * 1e9))
-    return true;
-  if (dropped_at_ns_ >= 0 && now_ns - dropped_at_ns_ >= 500'000'000) {
-    rep_.end_reason = "dropped";
-    return true;
-  }
-  if (now_ns - start_ns_ >= static_cast<std::int64_t>(sc_.max_time_s * 1e9)) return true;
-  if (!result_.run.physics_finite) {
-    rep_.end_reason = "physics";
-    return true;
-  }
-  return false;
+  // Frames are counted in periods of the wall clock since the start, rendered or skipped.
+  return run_.ended_after_frame(frame_ - first_frame_ + 1,
+                                static_cast<double>(now_ns - start_ns_) * 1e-9);
 }
 
 void RealtimeRun::finish() {
@@ -568,13 +530,8 @@ void RealtimeRun::finish() {
   c_.commands = arm.commands;
   c_.invalid_commands = arm.refused();
   c_.deadman_trips = arm.deadman_trips;
-  if (util::stop_requested() && !ended_) rep_.end_reason = "stopped";
-  scorer_.finish(world_.cap().dropped, static_cast<double>(util::realtime_ns() - start_ns_) * 1e-9,
-                 frame_ - first_frame_);
-  rep_.scenario_case = scenario_case(sc_.world);
-  rep_.hold = hold_need(sc_.world, cfg_.f2_n);
-  judge_negative_case(rep_);
-  if (ended_ && rep_.completed) rep_.end_reason = "done";
+  if (util::stop_requested() && !run_.task_has_ended()) rep_.end_reason = "stopped";
+  run_.finish(static_cast<double>(util::realtime_ns() - start_ns_) * 1e-9, frame_ - first_frame_);
   if (!latencies_ms_.empty()) {
     result_.latency_samples = latencies_ms_.size();
     result_.latency_ms = latencies_ms_;
@@ -594,7 +551,6 @@ RealtimeResult RealtimeRun::run() {
   start_ns_ = util::realtime_ns();
   frame_ = static_cast<std::uint64_t>((start_ns_ + lead_ns_) / period_ns_) + 1;
   first_frame_ = frame_;
-  rep_.end_reason = "max_time";
   while (!util::stop_requested()) {
     const std::int64_t send_ns = static_cast<std::int64_t>(frame_) * period_ns_;
     serve_until(send_ns - lead_ns_);

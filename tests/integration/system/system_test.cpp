@@ -154,6 +154,26 @@ class LoopbackSystem {
   testing::ProcessResult sensor_result_;
 };
 
+// The decisions of a run (its report): a real-time run and a lockstep run of one scenario drive
+// one scenario core (rig/lockstep's ScenarioRun), so they must decide these alike.
+json decisions(const json& r) {
+  json d;
+  for (const char* key :
+       {"completed", "dropped", "grasp_classified", "release_classified", "tightened_cycle",
+        "true_tight_cycle", "case", "negative_case_passed", "opened_in_air"})
+    d[key] = r.at(key);
+  d["end_reason"] = r.at("lockstep").at("end_reason");
+  return d;
+}
+
+json lockstep_report(const std::string& scenario, const std::filesystem::path& dir) {
+  const auto report = dir / "lockstep-report.json";
+  const auto r = testing::run(
+      {TACTILE_RIG_PATH, "--lockstep", "--scenario", scenario, "--report", report.string()});
+  if (r.exit_code != 0) throw std::runtime_error("rig --lockstep failed: " + r.err);
+  return json::parse(slurp(report));
+}
+
 std::string logs(LoopbackSystem& s) {
   return "\n--- hand_node\n" + s.hand().err_so_far() + "\n--- sensor_node\n" +
          s.sensor().err_so_far() + "\n--- rig\n" + s.rig().err_so_far();
@@ -190,6 +210,24 @@ TEST(LoopbackSystem, CompletesThePapersTask) {
   for (const char* png : {"fig10.png", "timeline.png"}) {
     EXPECT_GT(std::filesystem::file_size(s.dir() / "plots" / png), 1000U) << png;
   }
+  EXPECT_EQ(decisions(r), decisions(lockstep_report(kScenario, s.dir()))) << r.dump();
+}
+
+// The sweep's negative case in real time: the bottle stands away from where the controller
+// looks for it, the cap lowered there meets nothing. No release may be classified and the
+// fingers may not open in the air (opened_in_air, which the real-time run once never set), and
+// the run ends as the lockstep run of the same file does: the task aborted at lower_limit_m.
+TEST(LoopbackSystem, DisplacedBottleDecidesAsTheLockstepRunDoes) {
+  LoopbackSystem s(TACTILE_DISPLACED_SCENARIO);
+  const json r = s.finish(150s);
+  ASSERT_TRUE(r.is_object()) << logs(s);
+  EXPECT_EQ(s.rig_result().exit_code, 0) << logs(s);
+  EXPECT_EQ(r["case"], "bottle_displaced") << r.dump();
+  EXPECT_EQ(r["release_classified"], nullptr) << r.dump();
+  EXPECT_EQ(r["opened_in_air"], false) << r.dump();
+  EXPECT_EQ(r["negative_case_passed"], true) << r.dump();
+  EXPECT_EQ(decisions(r), decisions(lockstep_report(TACTILE_DISPLACED_SCENARIO, s.dir())))
+      << r.dump();
 }
 
 // A user's join of a recording: every TactileFrame finds the GroundTruth of its image by the

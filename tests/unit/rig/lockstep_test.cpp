@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "tactile/rig/scenario_run.hpp"
+
 namespace tactile::rig {
 namespace {
 

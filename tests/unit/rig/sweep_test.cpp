@@ -18,6 +18,7 @@
 #include "process.hpp"
 #include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/scenario.hpp"
+#include "tactile/rig/scenario_run.hpp"
 #include "tactile/util/files.hpp"
 
 namespace {

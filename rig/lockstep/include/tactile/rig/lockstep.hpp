@@ -237,12 +237,6 @@ struct LockstepResult {
   bool physics_finite = true;  // no step ever produced a non-finite value
 };
 
-// The scenario's case (Report::scenario_case) from its world: "cap_held", "bottle_displaced" or
-// "normal".
-const char* scenario_case(const WorldParams& world);
-// Sets report.negative_case_passed from the case and the classifications (and opened_in_air).
-void judge_negative_case(Report& report);
-
 // Runs the scenario to its end (DONE, ABORTED, a drop or max_time_s). Throws only for a bad
 // scenario (std::invalid_argument from the cores' constructors).
 LockstepResult run_lockstep(const Scenario& scenario, const LockstepOptions& options = {});
