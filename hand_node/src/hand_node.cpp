@@ -32,7 +32,7 @@ HandNode::HandNode(HandConfig cfg, zmq::context_t& ctx)
       link_({seconds_to_ns(cfg_.heartbeat_period_s), seconds_to_ns(cfg_.arm_timeout_s),
              seconds_to_ns(cfg_.arm_lost_s)}),
       start_(static_cast<std::uint64_t>(cfg_.start_after_frames), kWaitingReportNs),
-      stale_ns_(seconds_to_ns(cfg_.controller.stale_after_s)),
+      freshness_(seconds_to_ns(cfg_.controller.stale_after_s)),
       period_ns_(seconds_to_ns(cfg_.control_period_s)) {
   if (!cfg_.events.empty())
     events_.emplace(ctx, cfg_.events, cfg_.events_security ? &*cfg_.events_security : nullptr);
@@ -44,7 +44,7 @@ HandNode::HandNode(HandConfig cfg, zmq::context_t& ctx)
 wire::Answers HandNode::answers() const {
   wire::Answers a;
   for (std::size_t i = 0; i < control::kFingertips; ++i) {
-    if (!have_frame_[i]) continue;
+    if (!freshness_.has_frame(i)) continue;
     a.add({static_cast<std::int8_t>(i), frames_[i].header.sequence,
            frames_[i].header.camera_timestamp_ns});
   }
@@ -120,19 +120,11 @@ void HandNode::on_topic_message(std::int64_t now_ns) {
     return;
   }
   ++counters_.frames[ki];
-  have_frame_[ki] = true;
   received_ns_[ki] = received_ns;
-  last_whole_ns_[ki] = now_ns;
-  const std::size_t other = 1 - ki;
-  // The other fingertip is waited for when its frames came lately here, or when its last one
-  // left sensor_node shortly before this one: after hand_node was not scheduled for a while, its
-  // next frame is queued behind this one, and not waiting would hold the arm for stale data that
-  // is not stale.
-  const bool other_live = have_frame_[other] && (now_ns - last_whole_ns_[other] <= stale_ns_ ||
-                                                 frames_[other].header.receive_timestamp_ns >=
-                                                     frame.header.receive_timestamp_ns - stale_ns_);
-  if (pairing_.arrived(k, frame.header.receive_timestamp_ns, now_ns, other_live))
-    step(now_ns, pairing_.take());
+  const std::int64_t sent_ns = frame.header.receive_timestamp_ns;  // by sensor_node
+  freshness_.arrived(ki, now_ns, sent_ns);
+  const bool other_live = freshness_.live(1 - ki, now_ns, sent_ns);
+  if (pairing_.arrived(k, sent_ns, now_ns, other_live)) step(now_ns, pairing_.take());
 }
 
 void HandNode::on_arm_message(std::int64_t now_ns) {
@@ -195,7 +187,7 @@ void HandNode::step(std::int64_t now_ns, FramePairing::Fresh fresh) {
     t.sequence = frames_[i].header.sequence;
     t.camera_timestamp_ns = frames_[i].header.camera_timestamp_ns;
     t.fresh = fresh[i];
-    t.stale = !have_frame_[i] || now_ns - last_whole_ns_[i] > stale_ns_;
+    t.stale = freshness_.stale(i, now_ns);
     any_stale = any_stale || t.stale;
   }
   if (any_stale && !stale_) ++counters_.stale_holds;

@@ -16,6 +16,7 @@
 #include "tactile/wire/arm.hpp"
 #include "tactile/wire/sockets.hpp"
 #include "tactile/wire/tactile_frame.hpp"
+#include "tactile_freshness.hpp"
 #include "task_start.hpp"
 
 namespace tactile::hand {
@@ -75,7 +76,7 @@ class HandNode {
   FramePairing pairing_;
   ArmLink link_;
   TaskStart start_;
-  const std::int64_t stale_ns_;   // controller.stale_after_s
+  TactileFreshness freshness_;
   const std::int64_t period_ns_;  // control_period_s
 
   // Reused buffers: the per-frame path allocates nothing once they have grown.
@@ -89,8 +90,6 @@ class HandNode {
   std::array<wire::ReceivedFrame, control::kFingertips> frames_;
   wire::ReceivedCommand unused_;
 
-  std::array<bool, control::kFingertips> have_frame_{};
-  std::array<std::int64_t, control::kFingertips> last_whole_ns_{};
   std::array<std::int64_t, control::kFingertips> received_ns_{};  // CLOCK_REALTIME
   wire::ArmStateData arm_state_;
   std::int64_t last_update_ns_ = 0;
