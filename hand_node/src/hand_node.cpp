@@ -15,6 +15,10 @@ std::int64_t seconds_to_ns(double s) {
   return static_cast<std::int64_t>(s * 1e9);
 }
 
+// While the task waits to start, what it waits for is said again this often (a hand_node left
+// without an arm controller or a camera would otherwise fall silent after one line).
+constexpr std::int64_t kWaitingReportNs = 5'000'000'000;
+
 }  // namespace
 
 HandNode::HandNode(HandConfig cfg, zmq::context_t& ctx)
@@ -25,7 +29,11 @@ HandNode::HandNode(HandConfig cfg, zmq::context_t& ctx)
       arm_(ctx, cfg_.arm, cfg_.arm_security ? &*cfg_.arm_security : nullptr),
       controller_(cfg_.controller),
       pairing_(seconds_to_ns(cfg_.pair_window_s)),
-      stale_ns_(seconds_to_ns(cfg_.controller.stale_after_s)) {
+      link_({seconds_to_ns(cfg_.heartbeat_period_s), seconds_to_ns(cfg_.arm_timeout_s),
+             seconds_to_ns(cfg_.arm_lost_s)}),
+      start_(static_cast<std::uint64_t>(cfg_.start_after_frames), kWaitingReportNs),
+      freshness_(seconds_to_ns(cfg_.controller.stale_after_s)),
+      period_ns_(seconds_to_ns(cfg_.control_period_s)) {
   if (!cfg_.events.empty())
     events_.emplace(ctx, cfg_.events, cfg_.events_security ? &*cfg_.events_security : nullptr);
   for (std::size_t i = 0; i < control::kFingertips; ++i) {
@@ -36,61 +44,44 @@ HandNode::HandNode(HandConfig cfg, zmq::context_t& ctx)
 wire::Answers HandNode::answers() const {
   wire::Answers a;
   for (std::size_t i = 0; i < control::kFingertips; ++i) {
-    if (!have_frame_[i]) continue;
+    if (!freshness_.has_frame(i)) continue;
     a.add({static_cast<std::int8_t>(i), frames_[i].header.sequence,
            frames_[i].header.camera_timestamp_ns});
   }
   return a;
 }
 
-void HandNode::send_envelope() {
+bool HandNode::send_envelope() {
   wire::encode(out_, out_bytes_);
-  if (arm_.send(wire::bytes_of(out_bytes_))) {
-    last_sent_ns_ = util::monotonic_ns();
-  } else {
-    ++counters_.commands_blocked;
-  }
+  if (arm_.send(wire::bytes_of(out_bytes_))) return true;
+  ++counters_.commands_blocked;
+  return false;
 }
 
+// The wire's timestamps (the command's, the heartbeat's, the Decision's, a frame's receipt) are
+// CLOCK_REALTIME read when the message is made or received: they measure latency, they decide
+// nothing. Every decision takes the loop's monotonic now_ns.
 void HandNode::send_command(const control::Command& c, std::int64_t now_ns, bool names_frames) {
-  (void)now_ns;
-  switch (c.kind) {
-    case control::CommandKind::kMoveTo:
-      last_motion_ = c;
-      break;
-    case control::CommandKind::kFingerVelocities:
-      last_velocities_ = c;
-      break;
-    case control::CommandKind::kHold:
-    case control::CommandKind::kOpen:
-    case control::CommandKind::kStop:
-      last_motion_.reset();
-      last_velocities_.reset();
-      break;
-    case control::CommandKind::kNone:
-      break;
-  }
   v1::ArmCommand& cmd = *out_.mutable_arm_command();
   wire::fill_arm_command(c, ++command_sequence_, util::realtime_ns(),
                          names_frames ? answers() : wire::Answers{}, ids_, cmd);
   // When each answered frame arrived here: splits latency into transport and control.
   for (v1::FrameRef& r : *cmd.mutable_answers())
     r.set_receive_timestamp_ns(r.sensor_id() == ids_[0] ? received_ns_[0] : received_ns_[1]);
-  send_envelope();
+  link_.command_sent(c, now_ns, send_envelope());
   // A copy beside the events, as for ArmStates (the arm link itself is point to point).
   if (events_) events_->send(wire::kCommandTopic, wire::bytes_of(out_bytes_));
   ++counters_.commands;
 }
 
 void HandNode::send_heartbeat(std::int64_t now_ns) {
-  (void)now_ns;
   auto* hb = out_.mutable_heartbeat();
   hb->set_time_ns(util::realtime_ns());
   hb->set_sender("hand_node");
-  send_envelope();
+  link_.heartbeat_sent(now_ns, send_envelope());
 }
 
-void HandNode::on_topic_message() {
+void HandNode::on_topic_message(std::int64_t now_ns) {
   const std::int64_t received_ns = util::realtime_ns();
   const auto status = decoder_.decode(msg_.payload);
   const v1::Envelope& in = decoder_.envelope();
@@ -120,7 +111,7 @@ void HandNode::on_topic_message() {
   // one replaces it (no frame's displacement is skipped).
   if (pairing_.waiting(k)) {
     ++counters_.unpaired;
-    step(util::monotonic_ns(), pairing_.take());
+    step(now_ns, pairing_.take());
   }
   if (wire::read_tactile_frame(f, cfg_.fingertips[ki].calibration, frame) !=
       wire::DecodeStatus::kOk) {
@@ -129,23 +120,14 @@ void HandNode::on_topic_message() {
     return;
   }
   ++counters_.frames[ki];
-  have_frame_[ki] = true;
   received_ns_[ki] = received_ns;
-  const std::int64_t now = util::monotonic_ns();
-  last_whole_ns_[ki] = now;
-  const std::size_t other = 1 - ki;
-  // The other fingertip is waited for when its frames came lately here, or when its last one
-  // left sensor_node shortly before this one: after hand_node was not scheduled for a while, its
-  // next frame is queued behind this one, and not waiting would hold the arm for stale data that
-  // is not stale.
-  const bool other_live = have_frame_[other] && (now - last_whole_ns_[other] <= stale_ns_ ||
-                                                 frames_[other].header.receive_timestamp_ns >=
-                                                     frame.header.receive_timestamp_ns - stale_ns_);
-  if (pairing_.arrived(k, frame.header.receive_timestamp_ns, now, other_live))
-    step(now, pairing_.take());
+  const std::int64_t sent_ns = frame.header.receive_timestamp_ns;  // by sensor_node
+  freshness_.arrived(ki, now_ns, sent_ns);
+  const bool other_live = freshness_.live(1 - ki, now_ns, sent_ns);
+  if (pairing_.arrived(k, sent_ns, now_ns, other_live)) step(now_ns, pairing_.take());
 }
 
-void HandNode::on_arm_message() {
+void HandNode::on_arm_message(std::int64_t now_ns) {
   if (decoder_.decode(arm_buf_) != wire::DecodeStatus::kOk) {
     ++counters_.undecodable;
     return;
@@ -157,53 +139,38 @@ void HandNode::on_arm_message() {
       return;
     }
     ++counters_.arm_states;
-    have_arm_ = true;
     // Beside the events, for recordings and plots (the arm link itself is point to point).
     if (events_) events_->send(wire::kArmTopic, arm_buf_);
-    if (arm_state_.deadman) {
-      // The arm held because it heard nothing from us for a while (we were not scheduled, or
-      // the link stalled). We are here: carry on with what the arm was doing. Every ArmState
-      // that reports a hold is answered: a second hold may come before an ArmState without one
-      // (the arm reports each hold at least once, docs/arm.md), and a motion sent again is the
-      // same segment.
-      if (!deadman_seen_)
-        util::log_warn("the arm controller's deadman held the arm: resuming the current motion");
-      deadman_seen_ = true;
-      const std::int64_t now = util::monotonic_ns();
-      if (last_motion_) send_command(*last_motion_, now);
-      if (last_velocities_) send_command(*last_velocities_, now);
-    } else {
-      deadman_seen_ = false;
-    }
-    last_arm_ns_ = util::monotonic_ns();
-    if (arm_silent_reported_) {
-      util::log_info("arm controller heard again");
-      arm_silent_reported_ = false;
-    }
+    const ArmLink::StateHeard h = link_.arm_state(arm_state_.deadman, now_ns);
+    if (h.hold_began)
+      util::log_warn("the arm controller's deadman held the arm: resuming the current motion");
+    if (h.motion) send_command(*h.motion, now_ns);
+    if (h.velocities) send_command(*h.velocities, now_ns);
+    if (h.heard_again) util::log_info("arm controller heard again");
   } else if (in.has_heartbeat()) {
-    last_arm_ns_ = util::monotonic_ns();
+    if (link_.heartbeat_heard(now_ns)) util::log_info("arm controller heard again");
   } else {
     ++counters_.undecodable;
   }
 }
 
 bool HandNode::ready(std::int64_t now_ns) {
-  if (started_) return true;
-  const auto enough = static_cast<std::uint64_t>(cfg_.start_after_frames);
-  if (have_arm_ && counters_.frames[0] >= enough && counters_.frames[1] >= enough) {
-    started_ = true;
-    start_ns_ = now_ns;
+  if (start_.started()) return true;
+  const TaskStart::Check c = start_.check(now_ns, link_.arm_heard(), counters_.frames);
+  if (c.start) {
     util::log_info(
         "arm controller and both fingertips ({}, {}) are live ({} whole frames each): starting "
         "the task ({})",
         ids_[0], ids_[1], cfg_.start_after_frames, control::to_string(cfg_.controller.task));
     return true;
   }
-  if (!waiting_reported_) {
+  if (c.report_waiting) {
     util::log_info(
-        "waiting for the arm controller at {} and {} whole tactile frames each of {} and {}",
-        cfg_.arm, cfg_.start_after_frames, ids_[0], ids_[1]);
-    waiting_reported_ = true;
+        "waiting for the arm controller at {} ({}) and {} whole tactile frames each of {} ({} so "
+        "far, {} incomplete) and {} ({} so far, {} incomplete)",
+        cfg_.arm, link_.arm_heard() ? "answering" : "not heard yet", cfg_.start_after_frames,
+        ids_[0], counters_.frames[0], counters_.incomplete[0], ids_[1], counters_.frames[1],
+        counters_.incomplete[1]);
   }
   return false;
 }
@@ -220,13 +187,13 @@ void HandNode::step(std::int64_t now_ns, FramePairing::Fresh fresh) {
     t.sequence = frames_[i].header.sequence;
     t.camera_timestamp_ns = frames_[i].header.camera_timestamp_ns;
     t.fresh = fresh[i];
-    t.stale = !have_frame_[i] || now_ns - last_whole_ns_[i] > stale_ns_;
+    t.stale = freshness_.stale(i, now_ns);
     any_stale = any_stale || t.stale;
   }
   if (any_stale && !stale_) ++counters_.stale_holds;
   stale_ = any_stale;
   in.arm = wire::to_feedback(arm_state_);
-  in.now_s = static_cast<double>(now_ns - start_ns_) * 1e-9;
+  in.now_s = static_cast<double>(now_ns - start_.start_ns()) * 1e-9;
 
   const control::ControllerOutput out = controller_.update(in);
   const std::int64_t decided_ns = util::realtime_ns();
@@ -262,64 +229,70 @@ void HandNode::step(std::int64_t now_ns, FramePairing::Fresh fresh) {
   }
 }
 
+std::chrono::milliseconds HandNode::poll_wait(std::int64_t now_ns) const {
+  std::int64_t until_tick = std::max<std::int64_t>(0, last_update_ns_ + period_ns_ - now_ns);
+  if (pairing_.any_waiting())
+    until_tick = std::max<std::int64_t>(0, pairing_.deadline_ns() - now_ns);
+  // Heartbeats are due on time whatever the control period: the arm controller's deadman counts
+  // on them (with control_period_s above the frame period, frames alone would wake this loop
+  // only once a period).
+  const std::int64_t until_heartbeat =
+      std::max<std::int64_t>(0, link_.heartbeat_due_ns(now_ns) - now_ns);
+  return std::chrono::milliseconds(
+      std::min<std::int64_t>(std::min(until_tick, until_heartbeat) / 1000000 + 1, 50));
+}
+
+bool HandNode::tend_arm_link(std::int64_t now_ns) {
+  const ArmLink::Due due = link_.due(now_ns);
+  if (due.heartbeat) send_heartbeat(now_ns);
+  if (due.arm_silent) {
+    util::log_warn("no word from the arm controller for {:.1f} s",
+                   static_cast<double>(due.silent_ns) * 1e-9);
+  }
+  if (!due.arm_lost) return true;
+  // Gone, not slow: hold (should it come back, the arm stays where it is) and give up.
+  send_command(control::Command::hold(), now_ns, false);
+  util::log_error(
+      "the arm controller at {} has been silent for {:.1f} s (arm_lost_s {}): holding and "
+      "exiting",
+      cfg_.arm, static_cast<double>(due.silent_ns) * 1e-9, cfg_.arm_lost_s);
+  return false;
+}
+
 Outcome HandNode::run() {
   util::log_info("subscribing to {} sensor endpoint(s), arm controller at {}",
                  cfg_.subscribe.size(), cfg_.arm);
   if (events_) {
     util::log_info("events on {}{}", events_->endpoint(), cfg_.events_security ? " (CURVE)" : "");
   }
-  const std::int64_t period_ns = seconds_to_ns(cfg_.control_period_s);
-  const std::int64_t heartbeat_ns = seconds_to_ns(cfg_.heartbeat_period_s);
-  const std::int64_t arm_timeout_ns = seconds_to_ns(cfg_.arm_timeout_s);
-  const std::int64_t arm_lost_ns = seconds_to_ns(cfg_.arm_lost_s);
-  last_sent_ns_ = util::monotonic_ns() - heartbeat_ns;  // announce ourselves at once
   std::array<zmq::socket_ref, 2> sockets{sub_.socket(), arm_.socket()};
   Outcome outcome = Outcome::kStopped;
+  std::int64_t now = util::monotonic_ns();
   while (!util::stop_requested()) {
-    std::int64_t now = util::monotonic_ns();
-    std::int64_t until_tick = std::max<std::int64_t>(0, last_update_ns_ + period_ns - now);
-    if (pairing_.any_waiting())
-      until_tick = std::max<std::int64_t>(0, pairing_.deadline_ns() - now);
-    // Heartbeats are due on time whatever the control period: the arm controller's deadman
-    // counts on them (with control_period_s above the frame period, frames alone would wake
-    // this loop only once a period).
-    const std::int64_t until_heartbeat =
-        std::max<std::int64_t>(0, last_sent_ns_ + heartbeat_ns - now);
-    const auto wait = std::chrono::milliseconds(
-        std::min<std::int64_t>(std::min(until_tick, until_heartbeat) / 1000000 + 1, 50));
-    const std::int64_t poll_start = util::monotonic_ns();
+    const std::chrono::milliseconds wait = poll_wait(now);
     wire::poll_readable(sockets, wait);
-    // Woken more than a control period later than asked: this process did not run (not
-    // scheduled, stopped). Frames sent meanwhile may still be on their way through ZeroMQ's I/O
-    // thread: the time-driven step (which judges staleness) waits for one more short poll.
-    const bool overslept = util::monotonic_ns() - poll_start -
-                               std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count() >
-                           period_ns;
+    // The loop's one reading of the clock this turn: everything below decides on it.
+    const std::int64_t woke = util::monotonic_ns();
+    // Back more than a control period later than asked since the last turn began: this process
+    // did not run (not scheduled, stopped). Frames sent meanwhile may still be on their way
+    // through ZeroMQ's I/O thread: the time-driven step (which judges staleness) waits for one
+    // more short poll.
+    const bool overslept =
+        woke - now - std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count() >
+        period_ns_;
+    now = woke;
     while (sub_.receive(msg_, std::chrono::milliseconds(0)))
-      on_topic_message();
+      on_topic_message(now);
     while (arm_.receive(arm_buf_, std::chrono::milliseconds(0)))
-      on_arm_message();
-    now = util::monotonic_ns();
+      on_arm_message(now);
     // A frame waited its whole window without its pair: the controller runs on it alone.
     if (pairing_.due(now)) {
       ++counters_.unpaired;
       step(now, pairing_.take());
     }
     // Time-driven steps (timeouts, settling, staleness) run even when no frame arrives.
-    if (!overslept && !pairing_.any_waiting() && now - last_update_ns_ >= period_ns) step(now, {});
-    if (now - last_sent_ns_ >= heartbeat_ns) send_heartbeat(now);
-    if (have_arm_ && !arm_silent_reported_ && now - last_arm_ns_ > arm_timeout_ns) {
-      util::log_warn("no word from the arm controller for {:.1f} s",
-                     static_cast<double>(now - last_arm_ns_) * 1e-9);
-      arm_silent_reported_ = true;
-    }
-    if (have_arm_ && arm_lost_ns > 0 && now - last_arm_ns_ > arm_lost_ns) {
-      // Gone, not slow: hold (should it come back, the arm stays where it is) and give up.
-      send_command(control::Command::hold(), now, false);
-      util::log_error(
-          "the arm controller at {} has been silent for {:.1f} s (arm_lost_s {}): holding and "
-          "exiting",
-          cfg_.arm, static_cast<double>(now - last_arm_ns_) * 1e-9, cfg_.arm_lost_s);
+    if (!overslept && !pairing_.any_waiting() && now - last_update_ns_ >= period_ns_) step(now, {});
+    if (!tend_arm_link(now)) {
       outcome = Outcome::kArmLost;
       break;
     }
@@ -332,7 +305,7 @@ Outcome HandNode::run() {
     util::log_info("stop requested: sending Stop to the arm");
     // Not computed from any frame: it names none (the arm controller counts the latency of
     // commands from the frames they name).
-    send_command(control::Command::stop(), util::monotonic_ns(), false);
+    send_command(control::Command::stop(), now, false);
   }
   util::log_info(
       "frames used {}/{}, skipped incomplete {}/{}, undecodable {}, commands {} (blocked {}), "

@@ -2,18 +2,22 @@
 
 // hand_node's loop: TactileFrames in, the control core, ArmCommands out (docs/hand_node.md).
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 #include <zmq.hpp>
 
+#include "arm_link.hpp"
 #include "frame_pairing.hpp"
 #include "hand_config.hpp"
 #include "tactile/control/controller.hpp"
 #include "tactile/wire/arm.hpp"
 #include "tactile/wire/sockets.hpp"
 #include "tactile/wire/tactile_frame.hpp"
+#include "tactile_freshness.hpp"
+#include "task_start.hpp"
 
 namespace tactile::hand {
 
@@ -44,16 +48,24 @@ class HandNode {
   const HandCounters& counters() const { return counters_; }
 
  private:
-  void on_topic_message();
-  void on_arm_message();
+  // now_ns: the loop's reading of the monotonic clock for this turn (docs/architecture.md, rule 5).
+  void on_topic_message(std::int64_t now_ns);
+  void on_arm_message(std::int64_t now_ns);
   void step(std::int64_t now_ns, FramePairing::Fresh fresh);
   // names_frames: the command answers the latest frames (it was computed from them); a Stop on
   // a signal answers none.
   void send_command(const control::Command& c, std::int64_t now_ns, bool names_frames = true);
   void send_heartbeat(std::int64_t now_ns);
-  void send_envelope();
+  // False: the arm link could not queue it (the arm controller is absent); counted.
+  bool send_envelope();
   wire::Answers answers() const;
   bool ready(std::int64_t now_ns);
+  // How long the loop may wait for a message at now_ns: until the next control step, a waiting
+  // frame's window or a heartbeat, at most 50 ms.
+  std::chrono::milliseconds poll_wait(std::int64_t now_ns) const;
+  // The arm link's part of a turn: a heartbeat when due, the arm controller silent or lost.
+  // False: it is lost (a Hold went out).
+  bool tend_arm_link(std::int64_t now_ns);
 
   HandConfig cfg_;
   wire::FingertipIds ids_;
@@ -62,7 +74,10 @@ class HandNode {
   std::optional<wire::Publisher> events_;
   control::GraspMoveTwistController controller_;
   FramePairing pairing_;
-  const std::int64_t stale_ns_;  // controller.stale_after_s
+  ArmLink link_;
+  TaskStart start_;
+  TactileFreshness freshness_;
+  const std::int64_t period_ns_;  // control_period_s
 
   // Reused buffers: the per-frame path allocates nothing once they have grown.
   wire::TopicMessage msg_;
@@ -75,23 +90,10 @@ class HandNode {
   std::array<wire::ReceivedFrame, control::kFingertips> frames_;
   wire::ReceivedCommand unused_;
 
-  std::array<bool, control::kFingertips> have_frame_{};
-  std::array<std::int64_t, control::kFingertips> last_whole_ns_{};
   std::array<std::int64_t, control::kFingertips> received_ns_{};  // CLOCK_REALTIME
   wire::ArmStateData arm_state_;
-  bool have_arm_ = false;
-  std::int64_t last_arm_ns_ = 0;
-  bool arm_silent_reported_ = false;
-  bool started_ = false;
-  bool waiting_reported_ = false;
-  std::int64_t start_ns_ = 0;
-  std::int64_t last_sent_ns_ = 0;
   std::int64_t last_update_ns_ = 0;
   std::uint64_t command_sequence_ = 0;
-  // What the arm is doing on our word, to resume it after the arm controller's deadman held it.
-  std::optional<control::Command> last_motion_;
-  std::optional<control::Command> last_velocities_;
-  bool deadman_seen_ = false;
   bool stale_ = false;
   HandCounters counters_;
 };

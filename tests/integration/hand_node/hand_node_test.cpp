@@ -206,6 +206,7 @@ struct Injection {
   std::array<std::array<double, 2>, 2> slip{};
   std::array<bool, 2> publish{true, true};
   bool send_arm_state = true;  // the test arm controller's ArmState of this frame
+  bool arm_deadman = false;    // that ArmState reports the arm controller's deadman hold
   int signal_hand = 0;         // a signal sent to hand_node before this frame is published
 };
 using Script = std::function<Injection(const SimWorld&, int frame)>;
@@ -429,7 +430,9 @@ class HandNodeRun {
       }
       world.note_contact();
       if (!peer.empty() && inj.send_arm_state) {
-        wire::fill_arm_state(world.state(last_command), kIds, *env.mutable_arm_state());
+        wire::ArmStateData state = world.state(last_command);
+        state.deadman = inj.arm_deadman;
+        wire::fill_arm_state(state, kIds, *env.mutable_arm_state());
         wire::encode(env, out);
         arm.send(peer, wire::bytes_of(out));
         for (std::uint64_t i = 0; i < flood.arm_messages_per_frame; ++i)
@@ -704,6 +707,45 @@ TEST(HandNode, HoldsOnStaleDataAndResumes) {
   // The task went on after resuming: lowering without a bottle to meet ends it aborted (exit 3).
   EXPECT_EQ(r.events.back(), v1::EVENT_KIND_ABORTED);
   EXPECT_EQ(r.process.exit_code, 3);
+}
+
+TEST(HandNode, AnswersEveryArmStateReportingTheDeadmanHoldWithTheMotionAgain) {
+  // The arm controller's deadman held the arm in transport (as when hand_node was not scheduled
+  // for longer than the deadman) and two ArmStates in a row say so: hand_node answers each with
+  // the transport's MoveTo and its finger velocities again, warns once, and the task goes on.
+  HandNodeRun run("", kStaleOnlyWhenLoadedS);
+  int reported = 0;
+  std::size_t before = 0;  // commands the arm had when the first report went out
+  std::vector<control::CommandKind> commands;
+  int transports = 0;
+  const RunResult r = run.run(
+      [&](const SimWorld& w, int frame) {
+        Injection inj = paper_story(w, frame);
+        if (w.segment() == "MOVE4" && reported < 2) {
+          if (reported == 0) before = w.commands().size();
+          inj.arm_deadman = true;
+          ++reported;
+        }
+        commands = w.commands();
+        transports = w.segments_named("MOVE4");
+        return inj;
+      },
+      40s);
+  ASSERT_FALSE(r.process.timed_out) << r.process.err;
+  ASSERT_EQ(reported, 2) << r.process.err;
+  EXPECT_EQ(r.process.exit_code, 0) << r.process.err;
+  EXPECT_EQ(r.events.back(), v1::EVENT_KIND_DONE) << r.process.err;
+  EXPECT_EQ(transports, 3) << r.process.err;  // its own and one per report
+  ASSERT_GE(commands.size(), before + 4);
+  using K = control::CommandKind;
+  EXPECT_EQ(std::vector<K>(commands.begin() + static_cast<std::ptrdiff_t>(before),
+                           commands.begin() + static_cast<std::ptrdiff_t>(before + 4)),
+            (std::vector<K>{K::kMoveTo, K::kFingerVelocities, K::kMoveTo, K::kFingerVelocities}))
+      << r.process.err;
+  const std::string warning = "the arm controller's deadman held the arm: resuming";
+  const auto first = r.process.err.find(warning);
+  ASSERT_NE(first, std::string::npos) << r.process.err;
+  EXPECT_EQ(r.process.err.find(warning, first + 1), std::string::npos) << r.process.err;
 }
 
 TEST(HandNode, FramesQueuedWhileItWasNotScheduledAreNotHeldAsStale) {

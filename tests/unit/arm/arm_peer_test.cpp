@@ -1,121 +1,98 @@
 // Who the arm answers and its deadman (docs/arm.md, "Timing"), with time as an argument: no
-// clock, no socket.
+// clock, no socket. The cases are a table shared with the Python arm side's ArmPeer
+// (tests/data/arm_link/arm_peer_cases.json, its format in its "about"): both implementations
+// are held to the same rows.
 #include "tactile/arm/arm_peer.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
 
 namespace tactile::arm {
 namespace {
 
-constexpr std::int64_t kMs = 1'000'000;
-constexpr std::int64_t kDeadman = 40 * kMs;
+using nlohmann::json;
 
-TEST(ArmPeer, NoPeerNoDeadman) {
-  ArmPeer p(kDeadman);
-  EXPECT_FALSE(p.has_peer());
-  EXPECT_FALSE(p.deadman_trips(10'000 * kMs));
-  EXPECT_FALSE(p.held());
+const std::filesystem::path kCases = std::filesystem::path(TACTILE_SOURCE_DIR) / "tests" / "data" /
+                                     "arm_link" / "arm_peer_cases.json";
+
+std::int64_t ns_of_ms(const json& ms) {
+  return std::llround(ms.get<double>() * 1e6);
 }
 
-TEST(ArmPeer, TheFirstClientThatSpeaksIsThePeer) {
-  ArmPeer p(kDeadman);
-  const ArmPeer::Heard h = p.heartbeat("hand", 5 * kMs);
-  EXPECT_TRUE(h.accepted);
-  EXPECT_TRUE(h.connected);
-  EXPECT_FALSE(h.new_client);
-  EXPECT_TRUE(p.has_peer());
-  EXPECT_EQ(p.peer(), "hand");
-  EXPECT_EQ(p.last_heard_ns(), 5 * kMs);
-  EXPECT_FALSE(p.heartbeat("hand", 6 * kMs).connected);
-}
-
-TEST(ArmPeer, TripsOnceJustAfterTheDeadman) {
-  ArmPeer p(kDeadman);
-  p.command("hand", 100 * kMs);
-  EXPECT_FALSE(p.deadman_trips(100 * kMs + kDeadman));  // exactly the deadman: still alive
-  EXPECT_TRUE(p.deadman_trips(100 * kMs + kDeadman + 1));
-  EXPECT_TRUE(p.held());
-  EXPECT_FALSE(p.deadman_trips(200 * kMs));  // once per silence
-  EXPECT_TRUE(p.held());
-}
-
-TEST(ArmPeer, HeartbeatsKeepTheArmGoing) {
-  ArmPeer p(kDeadman);
-  p.command("hand", 0);
-  for (std::int64_t t = 10 * kMs; t <= 1000 * kMs; t += 10 * kMs) {
-    EXPECT_TRUE(p.heartbeat("hand", t).accepted);
-    EXPECT_FALSE(p.deadman_trips(t + 30 * kMs)) << t;
+void expect_heard(const ArmPeer::Heard& h, const json& want) {
+  for (const auto& [key, value] : want.items()) {
+    EXPECT_TRUE(key == "accepted" || key == "connected" || key == "new_client" || key == "resumed")
+        << "unknown field " << key;
   }
-  EXPECT_FALSE(p.held());
+  EXPECT_EQ(h.accepted, want.value("accepted", false));
+  EXPECT_EQ(h.connected, want.value("connected", false));
+  EXPECT_EQ(h.new_client, want.value("new_client", false));
+  EXPECT_EQ(h.resumed, want.value("resumed", false));
 }
 
-TEST(ArmPeer, AnotherClientsHeartbeatIsRefusedWhileThePeerIsAlive) {
-  ArmPeer p(kDeadman);
-  p.heartbeat("hand", 0);
-  const ArmPeer::Heard h = p.heartbeat("intruder", 10 * kMs);
-  EXPECT_FALSE(h.accepted);
-  EXPECT_EQ(p.peer(), "hand");
-  EXPECT_EQ(p.last_heard_ns(), 0);  // the intruder's words do not keep the arm going
-  EXPECT_TRUE(p.deadman_trips(kDeadman + 1));
+void expect_state(const ArmPeer& p, const json& then) {
+  for (const auto& [key, value] : then.items()) {
+    if (key == "has_peer") {
+      EXPECT_EQ(p.has_peer(), value.get<bool>());
+    } else if (key == "peer") {
+      EXPECT_EQ(p.peer(), value.get<std::string>());
+    } else if (key == "held") {
+      EXPECT_EQ(p.held(), value.get<bool>());
+    } else if (key == "last_heard_ms") {
+      EXPECT_EQ(p.last_heard_ns(), ns_of_ms(value));
+    } else {
+      ADD_FAILURE() << "unknown state " << key;
+    }
+  }
 }
 
-TEST(ArmPeer, ANewClientTakesOverAfterTheDeadmanHold) {
-  ArmPeer p(kDeadman);
-  p.command("old", 0);
-  ASSERT_TRUE(p.deadman_trips(kDeadman + 1));
-  const ArmPeer::Heard h = p.heartbeat("new", 100 * kMs);
-  EXPECT_TRUE(h.accepted);
-  EXPECT_TRUE(h.new_client);
-  EXPECT_EQ(p.peer(), "new");
-  EXPECT_TRUE(p.held());  // the hold lasts until a command
-  const ArmPeer::Heard c = p.command("new", 110 * kMs);
-  EXPECT_TRUE(c.resumed);
-  EXPECT_FALSE(c.new_client);
-  EXPECT_FALSE(p.held());
+// One step of a case; returns what it did.
+std::string run_step(ArmPeer& p, const json& step) {
+  const auto what = step.at("do").get<std::string>();
+  if (what == "heartbeat") {
+    expect_heard(p.heartbeat(step.at("from").get<std::string>(), ns_of_ms(step.at("t_ms"))),
+                 step.at("heard"));
+  } else if (what == "command") {
+    expect_heard(p.command(step.at("from").get<std::string>(), ns_of_ms(step.at("t_ms"))),
+                 step.at("heard"));
+  } else if (what == "deadman_trips") {
+    EXPECT_EQ(p.deadman_trips(ns_of_ms(step.at("t_ms"))), step.at("trips").get<bool>());
+  } else if (what == "report_deadman") {
+    EXPECT_EQ(p.report_deadman(), step.at("reports").get<bool>());
+  } else {
+    ADD_FAILURE() << "unknown step " << what;
+  }
+  if (step.contains("then")) expect_state(p, step.at("then"));
+  return what;
 }
 
-TEST(ArmPeer, ACommandFromAnotherClientMakesItThePeer) {
-  ArmPeer p(kDeadman);
-  p.heartbeat("a", 0);
-  const ArmPeer::Heard c = p.command("b", 10 * kMs);
-  EXPECT_TRUE(c.accepted);
-  EXPECT_TRUE(c.new_client);
-  EXPECT_FALSE(c.resumed);
-  EXPECT_EQ(p.peer(), "b");
-  EXPECT_EQ(p.last_heard_ns(), 10 * kMs);
-}
-
-TEST(ArmPeer, TheSamePeerCommandingAgainEndsTheHold) {
-  ArmPeer p(kDeadman);
-  p.command("hand", 0);
-  ASSERT_TRUE(p.deadman_trips(50 * kMs));
-  EXPECT_TRUE(p.heartbeat("hand", 60 * kMs).accepted);
-  EXPECT_TRUE(p.held());  // a heartbeat does not end it
-  EXPECT_TRUE(p.command("hand", 70 * kMs).resumed);
-  EXPECT_FALSE(p.held());
-  EXPECT_FALSE(p.deadman_trips(70 * kMs + kDeadman));
-  EXPECT_TRUE(p.deadman_trips(70 * kMs + kDeadman + 1));
-}
-
-// A hold is reported by at least one ArmState even when a command ends it first (the client had
-// sent a velocity change meanwhile): the stopped motion must be sent again, and only the report
-// says so. Reported once; a hold still on is reported by every state.
-TEST(ArmPeer, EveryHoldIsReportedAtLeastOnceEvenWhenACommandEndsItFirst) {
-  ArmPeer p(kDeadman);
-  p.command("hand", 0);
-  EXPECT_FALSE(p.report_deadman());
-  ASSERT_TRUE(p.deadman_trips(50 * kMs));
-  EXPECT_TRUE(p.command("hand", 55 * kMs).resumed);  // before any state
-  EXPECT_FALSE(p.held());
-  EXPECT_TRUE(p.report_deadman());
-  EXPECT_FALSE(p.report_deadman());
-  ASSERT_TRUE(p.deadman_trips(55 * kMs + kDeadman + 1));
-  EXPECT_TRUE(p.report_deadman());
-  EXPECT_TRUE(p.report_deadman());  // still held
-  p.command("hand", 200 * kMs);
-  EXPECT_FALSE(p.report_deadman());  // this hold was reported
+TEST(ArmPeer, EveryCaseOfTheTableSharedWithThePythonArmSide) {
+  std::ifstream in(kCases);
+  ASSERT_TRUE(in) << kCases;
+  const json table = json::parse(in);
+  ASSERT_EQ(table.at("format"), "tactile-arm-peer-cases/1");
+  const json& cases = table.at("cases");
+  ASSERT_GE(cases.size(), 9U);
+  std::set<std::string> done;
+  for (const json& c : cases) {
+    SCOPED_TRACE(c.at("name").get<std::string>());
+    ArmPeer p(ns_of_ms(c.at("deadman_ms")));
+    std::size_t i = 0;
+    for (const json& step : c.at("steps")) {
+      SCOPED_TRACE(testing::Message() << "step " << i++);
+      done.insert(run_step(p, step));
+    }
+  }
+  // Every call of ArmPeer is held to the table.
+  EXPECT_EQ(done,
+            (std::set<std::string>{"command", "deadman_trips", "heartbeat", "report_deadman"}));
 }
 
 }  // namespace

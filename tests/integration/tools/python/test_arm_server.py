@@ -1,18 +1,22 @@
 """tactile_reader.arm's ArmServer over real sockets (tcp://127.0.0.1:*), as the C++ ArmServerOverSockets.*
 tests: the deadman trips once, a stranger's heartbeat is refused while the peer is alive,
 garbage and bad commands are counted and never reach the arm, CURVE refuses a client not in the
-list. Time is the test's: every call gets the instant it is for.
+list. Its ArmPeer (pure) runs the table of cases the C++ arm::ArmPeer runs
+(tests/data/arm_link/arm_peer_cases.json). Time is the test's: every call gets the instant it is
+for.
 
 Run by ctest with PYTHONPATH=BUILD/tools/python (hand_node against it: hand_node_test,
 HandNode.RunsPhaseOneAgainstThePythonArmSide)."""
 
+import json
 import os
+import pathlib
 import tempfile
 import unittest
 
 import zmq
 
-from tactile_reader.arm import ArmBackend, ArmServer, ArmStateData
+from tactile_reader.arm import ArmBackend, ArmPeer, ArmServer, ArmStateData
 from tactile_reader.messages import SCHEMA_VERSION, tactile_pb2
 
 MS = 1_000_000
@@ -186,6 +190,66 @@ class ArmServerTest(unittest.TestCase):
                 self.server(server_key=key)
         self.assertIn("chmod 600", str(caught.exception))
         self.assertNotIn(keys[1].decode(), str(caught.exception))
+
+
+ARM_PEER_CASES = (
+    pathlib.Path(__file__).resolve().parents[3] / "data" / "arm_link" / "arm_peer_cases.json"
+)
+HEARD = ("accepted", "connected", "new_client", "resumed")
+
+
+def ns_of_ms(ms):
+    return round(ms * 1e6)
+
+
+class ArmPeerTableTest(unittest.TestCase):
+    """The table shared with the C++ arm::ArmPeer's test (its format: the file's "about")."""
+
+    def heard(self, peer, step):
+        sender, now = step["from"].encode(), ns_of_ms(step["t_ms"])
+        if step["do"] == "heartbeat":
+            accepted, connected, new_client = peer.heartbeat(sender, now)
+            return dict(accepted=accepted, connected=connected, new_client=new_client,
+                        resumed=False)
+        connected, new_client, resumed = peer.command(sender, now)
+        return dict(accepted=True, connected=connected, new_client=new_client,
+                    resumed=resumed)
+
+    def run_step(self, peer, step):
+        what = step["do"]
+        if what in ("heartbeat", "command"):
+            want = step["heard"]
+            self.assertLessEqual(set(want), set(HEARD))
+            self.assertEqual(self.heard(peer, step), {k: want.get(k, False) for k in HEARD})
+        elif what == "deadman_trips":
+            self.assertEqual(peer.deadman_trips(ns_of_ms(step["t_ms"])), step["trips"])
+        elif what == "report_deadman":
+            self.assertEqual(peer.report_deadman(), step["reports"])
+        else:
+            self.fail(f"unknown step {what}")
+        state = {
+            "has_peer": lambda: peer.peer is not None,
+            "peer": lambda: peer.peer.decode() if peer.peer is not None else None,
+            "held": lambda: peer.held,
+            "last_heard_ms": lambda: peer.last_heard_ns,
+        }
+        for key, want in step.get("then", {}).items():
+            self.assertIn(key, state)
+            self.assertEqual(state[key](), ns_of_ms(want) if key == "last_heard_ms" else want, key)
+        return what
+
+    def test_every_case_of_the_table_shared_with_the_cpp_arm_side(self):
+        with open(ARM_PEER_CASES) as f:
+            table = json.load(f)
+        self.assertEqual(table["format"], "tactile-arm-peer-cases/1")
+        self.assertGreaterEqual(len(table["cases"]), 9)
+        done = set()
+        for case in table["cases"]:
+            peer = ArmPeer(ns_of_ms(case["deadman_ms"]))
+            for i, step in enumerate(case["steps"]):
+                with self.subTest(case=case["name"], step=i):
+                    done.add(self.run_step(peer, step))
+        self.assertEqual(done, {"command", "deadman_trips", "heartbeat", "report_deadman"})
 
 
 if __name__ == "__main__":
