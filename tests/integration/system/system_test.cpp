@@ -190,6 +190,15 @@ TEST(LoopbackSystem, CompletesThePapersTask) {
   for (const char* png : {"fig10.png", "timeline.png"}) {
     EXPECT_GT(std::filesystem::file_size(s.dir() / "plots" / png), 1000U) << png;
   }
+  // Both programs name the controller in their first lines, and the report does: the scenario
+  // leaves the detector to the control core's default.
+  EXPECT_NE(s.rig_result().err.find("(real time): slip detector: learned, grip: paper\n"),
+            std::string::npos)
+      << logs(s);
+  EXPECT_NE(s.hand_result().err.find("info: slip detector: learned, grip: paper\n"),
+            std::string::npos)
+      << logs(s);
+  EXPECT_EQ(r["controller"], (json{{"slip_detector", "learned"}, {"grip", "paper"}})) << r.dump();
 }
 
 // A user's join of a recording: every TactileFrame finds the GroundTruth of its image by the
