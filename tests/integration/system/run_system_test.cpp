@@ -72,6 +72,12 @@ TEST(RunSystem, EndpointsReachableFromTheHostAndTheRunRecordedWithRawFrames) {
   // hand_node's first line on the console: the detector (the control core's default here) and
   // the grip it runs.
   EXPECT_NE(r.err.find("info: slip detector: learned, grip: paper\n"), std::string::npos) << r.err;
+  // The paths it prints open from where it was run: absolute, not relative to its output folder.
+  const std::string out = (dir / "out").string();
+  EXPECT_NE(r.err.find("run-system: report " + out + "/report.json; plots: " + out + "/fig10.png " +
+                       out + "/"),
+            std::string::npos)
+      << r.err;
   const auto rec = recorder.wait(30s);
   EXPECT_FALSE(rec.timed_out);
   EXPECT_EQ(rec.exit_code, 0) << rec.err;
