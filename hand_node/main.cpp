@@ -5,6 +5,7 @@
 #include "src/hand_config.hpp"
 #include "src/hand_node.hpp"
 #include "tactile/cli/run.hpp"
+#include "tactile/control/config.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/realtime.hpp"
 #include "tactile/util/stop.hpp"
@@ -40,6 +41,7 @@ int run(int argc, char** argv) {
     if (!subscribe.empty()) cfg.subscribe = subscribe;
     if (!arm.empty()) cfg.arm = arm;
     if (!events.empty()) cfg.events = events;
+    tactile::util::log_info("{}", tactile::control::describe_controller(cfg.controller));
     // Before any thread exists, so that ZeroMQ's threads inherit it.
     tactile::util::apply_realtime_scheduling(cfg.realtime, config_path + ": realtime");
     if (cfg.realtime.priority != 0 || cfg.realtime.lock_memory)

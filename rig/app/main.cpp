@@ -10,6 +10,7 @@
 #include <string>
 
 #include "tactile/cli/run.hpp"
+#include "tactile/control/config.hpp"
 #include "tactile/rig/control_link.hpp"
 #include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/plots.hpp"
@@ -252,6 +253,9 @@ int run(int argc, char** argv) {
           write_configs);
       return 0;
     }
+    tactile::util::log_info(
+        "{} ({}): {}", scenario_path, lockstep ? "lockstep" : "real time",
+        tactile::control::describe_controller(tactile::rig::scenario_controller_config(scenario)));
     // The results are written at the end of a run that may last minutes: a folder that cannot take
     // them is refused now, not found out then.
     for (const std::string& file : {report_path, series_path, timing_path}) {

@@ -170,7 +170,9 @@ int main(int argc, char** argv) {
   app.add_option("--f2", opt.f2, "F2 [N] for the OVER flag")->capture_default_str();
   app.add_option("--dr", opt.dr, "dr [mm] for the SLIP flag")->capture_default_str();
   app.add_option("--width", opt.width, "picture width in pixels")->capture_default_str();
-  app.add_option("--height", opt.height, "picture height in pixels")->capture_default_str();
+  app.add_option("--height", opt.height,
+                 "picture height in pixels (shear fields: as tall as their panels need)")
+      ->capture_default_str();
   tactile::cli::add_log_level(app, opt.log_level);
   return tactile::cli::run(app, argc, argv, [&] { return run(opt); });
 }

@@ -282,6 +282,24 @@ double spacing(const SensorData& s) {
   return nearest[nearest.size() / 2];
 }
 
+// The axes of a map of the fingertip, drawn with -y up: the elements' layout and one element
+// spacing around it, so the fingertip fills the panel (an arrow reaching beyond is cut at the
+// edge).
+std::pair<std::pair<double, double>, std::pair<double, double>> layout_ranges(const SensorData& s) {
+  double x_lo = std::numeric_limits<double>::infinity();
+  double x_hi = -x_lo;
+  double y_lo = x_lo;
+  double y_hi = -x_lo;
+  for (const auto& [id, pos] : s.positions) {
+    x_lo = std::min(x_lo, pos.first);
+    x_hi = std::max(x_hi, pos.first);
+    y_lo = std::min(y_lo, -pos.second);
+    y_hi = std::max(y_hi, -pos.second);
+  }
+  const double margin = spacing(s);
+  return {{x_lo - margin, x_hi + margin}, {y_lo - margin, y_hi + margin}};
+}
+
 std::string snapshot_title(const Snapshot& snap) {
   if (std::isnan(snap.target_s)) return fmt::format("t = {:.3f} s (largest total shear)", snap.t_s);
   return fmt::format("t = {:.3f} s (asked {:.3f} s)", snap.t_s, snap.target_s);
@@ -334,9 +352,11 @@ std::vector<std::filesystem::path> draw_shear_fields(const PlotData& d,
         umax = std::max(umax, std::hypot(e.ux_mm, e.uy_mm));
     }
     const double scale = umax > 0 ? 0.8 * spacing(s) / umax : 1.0;
+    const auto [x_range, y_range] = layout_ranges(s);
     for (const auto& snap : s.snapshots) {
       auto& p = fig.add_panel();
       p.x_label("x [mm]").y_label("-y [mm] (up in the image)").equal_aspect();
+      p.x_range(x_range.first, x_range.second).y_range(y_range.first, y_range.second);
       const std::size_t unplaced = element_dots(p, s, snap);
       p.title(fmt::format("{}; arrows: u (mm) x {:.3g}{}", snapshot_title(snap), scale,
                           unplaced_text(unplaced)));
@@ -355,6 +375,7 @@ std::vector<std::filesystem::path> draw_shear_fields(const PlotData& d,
       st.color = plot::palette(3);
       p.arrows(x, y, u, v, "shear displacement u", st);
     }
+    fig.fit_height_to_aspect();
     out.push_back(dir / ("shear_" + safe(s.id) + ".png"));
     fig.save_png(out.back());
   }

@@ -32,6 +32,19 @@ const char* to_string(SlipDetectorKind k) {
   return "?";
 }
 
+const char* to_string(GripKind k) {
+  switch (k) {
+    case GripKind::kPaper:
+      return "paper";
+  }
+  return "?";
+}
+
+std::string describe_controller(const Config& c) {
+  return std::string("slip detector: ") + to_string(c.slip_detector) +
+         ", grip: " + to_string(c.grip);
+}
+
 std::optional<SlipDetectorKind> slip_detector_from_string(std::string_view name) {
   for (auto k : {SlipDetectorKind::kPaper, SlipDetectorKind::kField, SlipDetectorKind::kLearned}) {
     if (name == to_string(k)) return k;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <numeric>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -1189,6 +1190,35 @@ Figure& Figure::title(std::string text) {
 
 Figure& Figure::share_x(bool on) {
   share_x_ = on;
+  return *this;
+}
+
+Figure& Figure::fit_height_to_aspect(int max_height_px) {
+  const double total_weight = std::accumulate(weights_.begin(), weights_.end(), 0.0);
+  // The ranges each panel would have without the aspect (a copy with it off), and the plot area
+  // the present height gives; a few rounds, as the tick labels' width moves the plot areas.
+  for (int round = 0; round < 3; ++round) {
+    Figure plain = *this;
+    for (Panel& p : plain.panels_)
+      p.equal_aspect(false);
+    const std::vector<PanelLayout> ls = plain.layout();
+    int areas = 0;
+    double per_weight = 0;  // plot height per unit of share the most demanding panel needs
+    for (std::size_t i = 0; i < ls.size(); ++i) {
+      const PanelLayout& l = ls[i];
+      areas += l.bottom - l.top;
+      if (!panels_[i].has_equal_aspect() || l.x_scale != Scale::kLinear ||
+          l.y_scale != Scale::kLinear)
+        continue;
+      const double need =
+          (l.right - 1 - l.left) * (l.y_hi - l.y_lo) / (l.x_hi - l.x_lo) + 1;  // rows
+      per_weight = std::max(per_weight, need / weights_[i]);
+    }
+    if (per_weight == 0) return *this;
+    const int decoration = height_ - areas;
+    height_ = std::clamp(decoration + static_cast<int>(std::ceil(per_weight * total_weight)), 64,
+                         std::max(64, max_height_px));
+  }
   return *this;
 }
 

@@ -285,6 +285,8 @@ std::string report_json(const Report& r) {
   report["hold"] = {{"peak_accel_mps2", r.hold.peak_accel_mps2},
                     {"grip_needed_N", r.hold.grip_needed_n},
                     {"grip_allowed_N", r.hold.grip_allowed_n}};
+  report["controller"] = {{"slip_detector", r.controller.slip_detector},
+                          {"grip", r.controller.grip}};
   // Non-finite numbers are written as null; text that is not UTF-8 is replaced, not thrown on.
   return report.dump(2, ' ', false, ordered_json::error_handler_t::replace) + "\n";
 }

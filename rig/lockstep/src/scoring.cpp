@@ -101,6 +101,7 @@ RunScorer::RunScorer(LockstepResult& run, const control::Config& cfg, bool recor
   run_.report.normal_full_scale_N = cal.normal_curve.y().back();
   run_.report.slip.detector = control::to_string(cfg.slip_detector);
   run_.report.slip_other.detector = control::to_string(other(cfg.slip_detector));
+  run_.report.controller = {control::to_string(cfg.slip_detector), control::to_string(cfg.grip)};
 }
 
 FrameSample* RunScorer::sample_for(std::uint64_t frame) {

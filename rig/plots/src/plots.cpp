@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 #include "tactile/control/types.hpp"
@@ -59,12 +60,62 @@ plot::TaskFigureInput task_input(const LockstepResult& run, const control::Confi
 
 }  // namespace
 
+plot::Figure shear_figure(const Snapshot& snap,
+                          const std::array<Calibration, kFingertips>& calibrations) {
+  const std::array<const char*, kFingertips> names{"left", "right"};
+  // Portrait: the fingertips, each about as tall as wide, stacked (Figure has no columns).
+  plot::Figure fig(640, 1100);
+  fig.title("Shear u, t = " + std::to_string(snap.t).substr(0, 6) + " s: " + snap.label);
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    auto& p = fig.add_panel();
+    p.title(std::string(names[i]) + " fingertip (arrows: u x40; red: SLIP)")
+        .equal_aspect()
+        .no_legend();
+    p.x_label("image column [px]").y_label("-row [px]");
+    const double mm_per_px = calibrations[i].mm_per_px;
+    const double radius_px = calibrations[i].elements[0].radius_px;
+    std::array<std::vector<double>, 2> x, y, dx, dy;
+    double x_lo = std::numeric_limits<double>::infinity();
+    double x_hi = -x_lo;
+    double y_lo = x_lo;
+    double y_hi = -x_lo;
+    for (const auto& e : snap.fingertips[i]) {
+      x_lo = std::min(x_lo, e.x_px);
+      x_hi = std::max(x_hi, e.x_px);
+      y_lo = std::min(y_lo, -e.y_px);
+      y_hi = std::max(y_hi, -e.y_px);
+      plot::Style ring;
+      ring.line_width = 1;
+      ring.color = e.contact ? plot::Color{60, 60, 60} : plot::Color{200, 200, 200};
+      p.circle(e.x_px, -e.y_px, radius_px, {}, ring);
+      if (!e.contact) continue;
+      const std::size_t g = e.slip ? 1 : 0;
+      x[g].push_back(e.x_px);
+      y[g].push_back(-e.y_px);
+      dx[g].push_back(e.ux_mm / mm_per_px);
+      dy[g].push_back(-e.uy_mm / mm_per_px);
+    }
+    // The axes are the elements' layout with the disks and one radius around them: an arrow
+    // that reaches beyond is cut at the edge rather than shrinking the fingertip into a corner.
+    if (x_lo <= x_hi) {
+      const double margin = 2 * radius_px;
+      p.x_range(x_lo - margin, x_hi + margin).y_range(y_lo - margin, y_hi + margin);
+    }
+    for (std::size_t g = 0; g < 2; ++g) {
+      plot::Style s;
+      s.arrow_scale = 40;
+      s.color = g == 1 ? plot::Color{214, 39, 40} : plot::Color{31, 119, 180};
+      p.arrows(x[g], y[g], dx[g], dy[g], g == 1 ? "slip" : "stick", s);
+    }
+  }
+  fig.fit_height_to_aspect(1600);
+  return fig;
+}
+
 std::vector<std::filesystem::path> write_plots(const LockstepResult& run,
                                                const control::Config& controller,
                                                const std::filesystem::path& dir) {
   std::vector<std::filesystem::path> written;
-  const std::array<const char*, kFingertips> names{"left", "right"};
-
   const plot::TaskFigureInput in = task_input(run, controller);
   written.push_back(dir / "fig10.png");
   plot::fig10(in).save_png(written.back());
@@ -72,37 +123,8 @@ std::vector<std::filesystem::path> write_plots(const LockstepResult& run,
   // Fig. 3 style shear vector fields.
   int n = 0;
   for (const Snapshot& snap : run.series.snapshots) {
-    plot::Figure fig(1100, 560);
-    fig.title("Shear displacement u at t = " + std::to_string(snap.t).substr(0, 6) +
-              " s: " + snap.label + " (arrows x40; red: SLIP)");
-    for (std::size_t i = 0; i < kFingertips; ++i) {
-      auto& p = fig.add_panel();
-      p.title(std::string(names[i]) + " fingertip").equal_aspect().no_legend();
-      p.x_label("image column [px]").y_label("-row [px]");
-      const double mm_per_px = run.calibrations[i].mm_per_px;
-      std::array<std::vector<double>, 2> x, y, dx, dy;
-      for (const auto& e : snap.fingertips[i]) {
-        plot::Style ring;
-        ring.line_width = 1;
-        ring.color = e.contact ? plot::Color{60, 60, 60} : plot::Color{200, 200, 200};
-        p.circle(e.x_px, -e.y_px, run.calibrations[i].elements[0].radius_px, {}, ring);
-        if (!e.contact) continue;
-        const std::size_t g = e.slip ? 1 : 0;
-        x[g].push_back(e.x_px);
-        y[g].push_back(-e.y_px);
-        dx[g].push_back(e.ux_mm / mm_per_px);
-        dy[g].push_back(-e.uy_mm / mm_per_px);
-      }
-      for (std::size_t g = 0; g < 2; ++g) {
-        plot::Style s;
-        s.arrow_scale = 40;
-        s.color = g == 1 ? plot::Color{214, 39, 40} : plot::Color{31, 119, 180};
-        p.arrows(x[g], y[g], dx[g], dy[g], g == 1 ? "slip" : "stick", s);
-      }
-    }
-    // Side by side would need columns; stacked panels keep both fingertips readable.
     written.push_back(dir / ("shear-" + std::to_string(++n) + "-" + slug(snap.label) + ".png"));
-    fig.save_png(written.back());
+    shear_figure(snap, run.calibrations).save_png(written.back());
   }
 
   written.push_back(dir / "timeline.png");

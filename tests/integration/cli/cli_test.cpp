@@ -267,4 +267,29 @@ TEST_F(MisspeltKey, FailsTheRigsStart) {
   EXPECT_FALSE(fs::exists(dir_ / "report.json"));
 }
 
+// A run names its controller: the rig in lockstep says which slip detector (here the one
+// --slip-detector gives) and which grip it runs in its first lines and in its report.
+TEST_F(MisspeltKey, RigInLockstepNamesItsSlipDetectorAndGrip) {
+  std::ifstream in(kSource / "tests" / "data" / "scenarios" / "quick.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  write("scenario.yaml", text.str() + "sim: {max_time_s: 0.2}\n");
+  const fs::path report = dir_ / "report.json";
+  const ProcessResult r =
+      start({TACTILE_RIG_PATH, "--lockstep", "--scenario", (dir_ / "scenario.yaml").string(),
+             "--slip-detector", "field", "--report", report.string()});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("scenario.yaml (lockstep): slip detector: field, grip: paper\n"),
+            std::string::npos)
+      << r.err;
+  std::ifstream json(report);
+  std::stringstream written;
+  written << json.rdbuf();
+  // The report's last key, pretty-printed as the report writes it.
+  EXPECT_NE(written.str().find("\"controller\": {\n    \"slip_detector\": \"field\",\n    "
+                               "\"grip\": \"paper\"\n  }\n}"),
+            std::string::npos)
+      << written.str();
+}
+
 }  // namespace

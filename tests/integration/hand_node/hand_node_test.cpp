@@ -799,6 +799,9 @@ TEST(HandNode, SendsStopOnSigterm) {
   const RunResult r = run.run([](const SimWorld&, int) { return Injection{}; }, 20s, 3);
   ASSERT_FALSE(r.process.timed_out);
   EXPECT_EQ(r.process.exit_code, 0) << r.process.err;
+  // Its first lines say which slip detector (the file's) and which grip it runs.
+  EXPECT_NE(r.process.err.find("info: slip detector: paper, grip: paper\n"), std::string::npos)
+      << r.process.err;
   ASSERT_FALSE(r.commands.empty());
   EXPECT_EQ(r.commands.back(), control::CommandKind::kStop);
   // The Stop answers no frame (it was not computed from one): the arm controller does not count

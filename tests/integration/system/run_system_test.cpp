@@ -69,6 +69,15 @@ TEST(RunSystem, EndpointsReachableFromTheHostAndTheRunRecordedWithRawFrames) {
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("the task did not complete"), std::string::npos) << r.err;
   EXPECT_TRUE(std::regex_search(r.err, std::regex("run-system: recorded \\d+ messages"))) << r.err;
+  // hand_node's first line on the console: the detector (the control core's default here) and
+  // the grip it runs.
+  EXPECT_NE(r.err.find("info: slip detector: learned, grip: paper\n"), std::string::npos) << r.err;
+  // The paths it prints open from where it was run: absolute, not relative to its output folder.
+  const std::string out = (dir / "out").string();
+  EXPECT_NE(r.err.find("run-system: report " + out + "/report.json; plots: " + out + "/fig10.png " +
+                       out + "/"),
+            std::string::npos)
+      << r.err;
   const auto rec = recorder.wait(30s);
   EXPECT_FALSE(rec.timed_out);
   EXPECT_EQ(rec.exit_code, 0) << rec.err;

@@ -211,6 +211,15 @@ TEST(LoopbackSystem, CompletesThePapersTask) {
     EXPECT_GT(std::filesystem::file_size(s.dir() / "plots" / png), 1000U) << png;
   }
   EXPECT_EQ(decisions(r), decisions(lockstep_report(kScenario, s.dir()))) << r.dump();
+  // Both programs name the controller in their first lines, and the report does: the scenario
+  // leaves the detector to the control core's default.
+  EXPECT_NE(s.rig_result().err.find("(real time): slip detector: learned, grip: paper\n"),
+            std::string::npos)
+      << logs(s);
+  EXPECT_NE(s.hand_result().err.find("info: slip detector: learned, grip: paper\n"),
+            std::string::npos)
+      << logs(s);
+  EXPECT_EQ(r["controller"], (json{{"slip_detector", "learned"}, {"grip", "paper"}})) << r.dump();
 }
 
 // The sweep's negative case in real time: the bottle stands away from where the controller

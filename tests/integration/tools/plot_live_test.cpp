@@ -35,6 +35,18 @@ bool is_png(const std::filesystem::path& p) {
   return b.size() > 1000 && b.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0;
 }
 
+// A PNG's width and height (its IHDR chunk, big-endian, right after the signature).
+std::pair<std::uint32_t, std::uint32_t> png_size(const std::filesystem::path& p) {
+  const std::string b = util::read_file(p);
+  const auto be32 = [&](std::size_t at) {
+    std::uint32_t v = 0;
+    for (std::size_t i = 0; i < 4; ++i)
+      v = (v << 8) | static_cast<std::uint8_t>(b.at(at + i));
+    return v;
+  };
+  return {be32(16), be32(20)};
+}
+
 TEST(Plot, DrawsEveryFigureFromALog) {
   TempDir dir;
   write_test_log(dir / "run.tlog", true);
@@ -50,6 +62,11 @@ TEST(Plot, DrawsEveryFigureFromALog) {
     EXPECT_NE(r.out.find(std::string("wrote ") + (dir / "out" / name).string()), std::string::npos)
         << r.out;
   }
+  // The fingertip (a ring of elements, as wide as tall) fills each snapshot's panel to scale:
+  // the picture is about two squares tall, not 1000 x 700 with the ring in a fifth of each axis.
+  const auto [width, height] = png_size(dir / "out" / "shear_left.png");
+  EXPECT_EQ(width, 1000U);
+  EXPECT_GT(height, 2 * 850U);
 }
 
 TEST(Plot, WithoutPositionsFig10IsAgainstTimeAndSaysSo) {

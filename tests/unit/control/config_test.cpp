@@ -127,6 +127,16 @@ INSTANTIATE_TEST_SUITE_P(
         BadField{"stale_abort_s", [](Config& c) { c.stale_abort_s = -1; }},
         BadField{"task", [](Config& c) { c.task = static_cast<Task>(9); }}));
 
+// What every run prints in its first lines: the detector and the grip, named by their to_string.
+TEST(Config, DescribesItsDetectorAndGrip) {
+  Config c;
+  EXPECT_EQ(c.grip, GripKind::kPaper);
+  EXPECT_STREQ(to_string(GripKind::kPaper), "paper");
+  EXPECT_EQ(describe_controller(c), "slip detector: learned, grip: paper");
+  c.slip_detector = SlipDetectorKind::kField;
+  EXPECT_EQ(describe_controller(c), "slip detector: field, grip: paper");
+}
+
 TEST(Config, MessageGivesTheValue) {
   Config c;
   c.f1_n = -2.5;

@@ -461,6 +461,37 @@ TEST(Figure, EqualAspectGivesEqualScales) {
   EXPECT_GE(l.y_hi, 1);
 }
 
+// Two square layouts stacked in a wide picture: equal aspect alone widens x to three times the
+// data; fitted, the picture is as tall as the squares need and neither axis is widened.
+TEST(Figure, FitHeightToAspectLetsEqualAspectPanelsFillTheirAxes) {
+  Figure fig(600, 300);
+  const std::vector<double> x{-1, 1};
+  const std::vector<double> y{-1, 1};
+  for (int i = 0; i < 2; ++i)
+    fig.add_panel().scatter(x, y).x_range(-1.1, 1.1).y_range(-1.1, 1.1).equal_aspect();
+  EXPECT_GT(fig.layout()[0].x_hi - fig.layout()[0].x_lo, 5.0);
+  fig.fit_height_to_aspect();
+  EXPECT_GT(fig.height(), 2 * 450);
+  EXPECT_LT(fig.height(), 2 * 600);
+  for (const PanelLayout& l : fig.layout()) {
+    EXPECT_DOUBLE_EQ(l.x_lo, -1.1);
+    EXPECT_DOUBLE_EQ(l.x_hi, 1.1);
+    EXPECT_NEAR(l.y_lo, -1.1, 0.01);  // within a row of the range asked for
+    EXPECT_NEAR(l.y_hi, 1.1, 0.01);
+    EXPECT_GE(l.y_hi - l.y_lo, 2.2);
+    const double ux = (l.x_hi - l.x_lo) / (l.right - 1 - l.left);
+    const double uy = (l.y_hi - l.y_lo) / (l.bottom - 1 - l.top);
+    EXPECT_NEAR(ux, uy, 1e-12);
+  }
+  // Capped, and a figure without equal-aspect panels keeps its height.
+  Figure capped(600, 300);
+  capped.add_panel().scatter(x, y).equal_aspect();
+  EXPECT_EQ(capped.fit_height_to_aspect(400).height(), 400);
+  Figure plain(600, 300);
+  plain.add_panel().scatter(x, y);
+  EXPECT_EQ(plain.fit_height_to_aspect().height(), 300);
+}
+
 TEST(Figure, RenderingIsDeterministic) {
   Figure fig(400, 300);
   const std::vector<double> x{0, 1, 2, 3};

@@ -146,6 +146,8 @@ TEST(Lockstep, FieldDetectorClassifiesALightCapByItsLoad) {
   const Report rep = run_lockstep(s, o).report;
   EXPECT_EQ(rep.slip.detector, "field");
   EXPECT_EQ(rep.slip_other.detector, "paper");
+  EXPECT_EQ(rep.controller.slip_detector, "field");
+  EXPECT_EQ(rep.controller.grip, "paper");
   EXPECT_TRUE(rep.completed) << rep.end_reason;
   EXPECT_EQ(rep.grasp_classified, std::optional<std::string>("grasp"));
   EXPECT_EQ(rep.release_classified, std::optional<std::string>("release"));
@@ -281,13 +283,15 @@ TEST(Lockstep, ReportHasTheInterfaceKeys) {
                                             "negative_case_passed",
                                             "opened_in_air",
                                             "holdable",
-                                            "hold"}));
+                                            "hold",
+                                            "controller"}));
   EXPECT_EQ(j.at("case"), "normal");
   EXPECT_TRUE(j.at("negative_case_passed").is_null());
   EXPECT_EQ(j.at("opened_in_air"), false);
   EXPECT_TRUE(j.at("holdable").is_boolean());
   for (const char* key : {"peak_accel_mps2", "grip_needed_N", "grip_allowed_N"})
     EXPECT_TRUE(j.at("hold").at(key).is_number()) << key;
+  EXPECT_EQ(j.at("controller"), (nlohmann::json{{"slip_detector", "paper"}, {"grip", "paper"}}));
   // Null when either instant is missing; numbers when both are there.
   EXPECT_TRUE(j.at("tight_time_error_s").is_null());
   EXPECT_TRUE(j.at("tight_error_deg").is_null());

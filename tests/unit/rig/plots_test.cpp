@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <vector>
 
 namespace tactile::rig {
@@ -33,6 +34,45 @@ TEST(LatencyFigure, WithoutOutliersEveryAnswerIsOnTheAxis) {
   ASSERT_EQ(layout.size(), 1U);
   EXPECT_LE(layout[0].x_lo, 0.5);
   EXPECT_GE(layout[0].x_hi, 2.49);
+}
+
+// The shear PNGs: each fingertip fills its axes (it was drawn in about 15 % of an x axis from
+// -800 to 1400 px, the panels being wide and the aspect equal), to scale, arrows cut at the edge.
+TEST(ShearFigure, EachFingertipFillsItsAxesToScale) {
+  std::array<Calibration, kFingertips> cals;
+  for (auto& c : cals) {
+    c.mm_per_px = 0.05;
+    c.elements.resize(1);
+    c.elements[0].radius_px = 12;
+  }
+  // 41 disks in a 7 x 6 grid from (140, 60) to (500, 360) px; one long arrow out of the layout.
+  Snapshot snap;
+  snap.label = "grasp classified";
+  for (auto& tip : snap.fingertips) {
+    for (std::size_t k = 0; k < tip.size(); ++k) {
+      tip[k].x_px = 140 + 60.0 * static_cast<double>(k % 7);
+      tip[k].y_px = 60 + 60.0 * static_cast<double>(k / 7);
+      tip[k].contact = k % 3 == 0;
+      tip[k].ux_mm = k == 0 ? 2.0 : 0.01;  // 40 x 40 px: 1600 px long
+    }
+  }
+  const auto layout = shear_figure(snap, cals).layout();
+  ASSERT_EQ(layout.size(), 2U);
+  for (const auto& l : layout) {
+    // The layout and its disks inside, the axes no more than the margin beyond them.
+    EXPECT_LE(l.x_lo, 140 - 12);
+    EXPECT_GE(l.x_hi, 500 + 12);
+    EXPECT_LE(l.y_lo, -360 - 12);
+    EXPECT_GE(l.y_hi, -60 + 12);
+    EXPECT_GE(l.x_lo, 140 - 3 * 12 - 1);
+    EXPECT_LE(l.x_hi, 500 + 3 * 12 + 1);
+    EXPECT_GE(l.y_lo, -360 - 3 * 12 - 1);
+    EXPECT_LE(l.y_hi, -60 + 3 * 12 + 1);
+    // To scale: one pixel of the image as long along x as along y.
+    const double ux = (l.x_hi - l.x_lo) / (l.right - 1 - l.left);
+    const double uy = (l.y_hi - l.y_lo) / (l.bottom - 1 - l.top);
+    EXPECT_NEAR(ux / uy, 1.0, 1e-9);
+  }
 }
 
 }  // namespace

@@ -1,13 +1,15 @@
 // The MCAP writer and the log export, read back by a parser written here from the spec
 // (https://mcap.dev/spec), independent of the writer's code: every record framed, the magic at
 // both ends, the CRCs, the footer -> summary -> chunk index -> chunk -> message index path a
-// reader uses, the statistics, and the schemas as FileDescriptorSets that rebuild the messages.
+// reader uses, the statistics, the metadata index -> metadata path, and the schemas as
+// FileDescriptorSets that rebuild the messages and name every field as protoc does.
 #include <google/protobuf/descriptor.pb.h>
 #include <google/protobuf/descriptor_database.h>
 #include <google/protobuf/dynamic_message.h>
 #include <gtest/gtest.h>
 #include <zstd.h>
 
+#include <cctype>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -95,7 +97,19 @@ struct Parsed {
   std::uint32_t chunk_count = 0;
   std::map<std::uint16_t, std::uint64_t> channel_counts;
   std::vector<std::string> compressions;
+  std::uint32_t metadata_count = 0;                                    // from the statistics
+  std::map<std::string, std::map<std::string, std::string>> metadata;  // by its index
 };
+
+std::map<std::string, std::string> parse_map(std::string_view bytes) {
+  std::map<std::string, std::string> out;
+  Cursor c{bytes};
+  while (!c.done()) {
+    const auto key = std::string(c.string());
+    EXPECT_TRUE(out.emplace(key, std::string(c.string())).second) << "key twice: " << key;
+  }
+  return out;
+}
 
 Parsed parse(const std::string& file) {
   Parsed p;
@@ -156,8 +170,8 @@ Parsed parse(const std::string& file) {
       p.message_count = c.get<std::uint64_t>();
       EXPECT_EQ(c.get<std::uint16_t>(), p.schemas.size());
       EXPECT_EQ(c.get<std::uint32_t>(), p.channels.size());
-      c.get<std::uint32_t>();
-      c.get<std::uint32_t>();
+      c.get<std::uint32_t>();  // attachments
+      p.metadata_count = c.get<std::uint32_t>();
       p.chunk_count = c.get<std::uint32_t>();
       c.get<std::uint64_t>();
       c.get<std::uint64_t>();
@@ -166,6 +180,19 @@ Parsed parse(const std::string& file) {
         const auto ch = m.get<std::uint16_t>();
         p.channel_counts[ch] = m.get<std::uint64_t>();
       }
+    } else if (r.opcode == 0x0D) {
+      // Metadata Index -> the Metadata record in the data section, outside every chunk.
+      const auto at = c.get<std::uint64_t>();
+      const auto length = c.get<std::uint64_t>();
+      const auto name = std::string(c.string());
+      EXPECT_LT(at + length, summary_start);
+      const auto record = records(std::string_view(file).substr(at, length));
+      EXPECT_EQ(record.size(), 1u);
+      EXPECT_EQ(record[0].opcode, 0x0C);
+      Cursor m{record[0].content};
+      EXPECT_EQ(m.string(), name);
+      EXPECT_TRUE(p.metadata.emplace(name, parse_map(m.string())).second) << name;
+      EXPECT_TRUE(m.done());
     } else if (r.opcode == 0x08) {
       const auto start_time = c.get<std::uint64_t>();
       const auto end_time = c.get<std::uint64_t>();
@@ -236,6 +263,7 @@ Parsed parse(const std::string& file) {
   }
   EXPECT_EQ(p.chunk_count, p.compressions.size());
   EXPECT_EQ(p.message_count, p.messages.size());
+  EXPECT_EQ(p.metadata_count, p.metadata.size());
   return p;
 }
 
@@ -273,7 +301,10 @@ TEST_P(McapWriterTest, ManyChunksReadBackByTheirIndex) {
     std::string data(i % 50, static_cast<char>('a' + i % 26));
     w.write_message(ch, i, t, t - 5, data);
     written.push_back({ch, i, t, t - 5, data});
+    // Metadata between messages closes the open chunk: it is never written inside one.
+    if (i == 150) w.add_metadata("middle", {{"k", "v"}, {"empty", ""}});
   }
+  w.add_metadata("end", {});
   w.finish();
   EXPECT_EQ(w.bytes_written(), file.size());
   const Parsed p = parse(file);
@@ -292,6 +323,8 @@ TEST_P(McapWriterTest, ManyChunksReadBackByTheirIndex) {
   EXPECT_EQ(p.channel_counts.at(b), 100u);
   EXPECT_EQ(p.channels.at(a).second, "frame/left");
   EXPECT_EQ(p.schemas.at(s).first, "a.B");
+  EXPECT_EQ(p.metadata, (std::map<std::string, std::map<std::string, std::string>>{
+                            {"middle", {{"k", "v"}, {"empty", ""}}}, {"end", {}}}));
 }
 
 INSTANTIATE_TEST_SUITE_P(Compressions, McapWriterTest,
@@ -304,6 +337,35 @@ TEST(Mcap, RefusesUnknownIdsAndCompressions) {
   EXPECT_THROW(mcap::parse_compression("lz4"), std::invalid_argument);
 }
 
+// protoc's json_name, written here from its rule: the field name with each '_' dropped and the
+// letter after it upper-cased ("measure_time_us" -> "measureTimeUs").
+std::string lower_camel(std::string_view name) {
+  std::string out;
+  bool upper = false;
+  for (const char ch : name) {
+    if (ch == '_') {
+      upper = true;
+      continue;
+    }
+    out += upper ? static_cast<char>(std::toupper(static_cast<unsigned char>(ch))) : ch;
+    upper = false;
+  }
+  return out;
+}
+
+// Every field of `type` and of the types nested in it has protoc's json_name; returns how many.
+int expect_json_names(const google::protobuf::DescriptorProto& type, const std::string& scope) {
+  int fields = 0;
+  for (const auto& f : type.field()) {
+    EXPECT_TRUE(f.has_json_name()) << scope << "." << f.name();
+    EXPECT_EQ(f.json_name(), lower_camel(f.name())) << scope << "." << f.name();
+    ++fields;
+  }
+  for (const auto& nested : type.nested_type())
+    fields += expect_json_names(nested, scope + "." + nested.name());
+  return fields;
+}
+
 // A log as the recorder writes it, exported: every message on its topic's channel, unwrapped,
 // decodable from the embedded FileDescriptorSet alone (as Foxglove decodes it).
 TEST(McapExport, UnwrapsEnvelopesAndEmbedsTheirSchemas) {
@@ -312,6 +374,15 @@ TEST(McapExport, UnwrapsEnvelopesAndEmbedsTheirSchemas) {
   {
     v1::LogHeader h;
     h.set_writer("mcap_test");
+    h.set_created_ns(1'700'000'000'123'456'789);
+    h.set_host("hand-pc");
+    h.set_note("a run");
+    auto* source = h.add_sources();
+    source->set_endpoint("tcp://x");
+    source->add_topics("frame/");
+    source->add_topics("raw/");
+    h.add_sources()->set_endpoint("tcp://y");
+    h.mutable_sources(1)->set_curve(true);
     recording::LogWriter w(log, h, {});
     std::string buf;
     for (int i = 0; i < 30; ++i) {
@@ -378,6 +449,36 @@ TEST(McapExport, UnwrapsEnvelopesAndEmbedsTheirSchemas) {
   EXPECT_EQ(p.channel_counts.at(by_topic.at("frame/left")), 30u);
   EXPECT_EQ(p.channel_counts.at(by_topic.at("event")), 3u);
   EXPECT_EQ(p.channel_counts.at(by_topic.at("raw/left")), 1u);
+
+  // The log's header, as one Metadata record.
+  EXPECT_EQ(p.metadata.size(), 1u);
+  EXPECT_EQ(p.metadata.at("tactile_log_header"),
+            (std::map<std::string, std::string>{{"format", "tactile-log/1"},
+                                                {"created_ns", "1700000000123456789"},
+                                                {"writer", "mcap_test"},
+                                                {"host", "hand-pc"},
+                                                {"note", "a run"},
+                                                {"log_file", "run.tlog"},
+                                                {"source.0.endpoint", "tcp://x"},
+                                                {"source.0.topics", "frame/,raw/"},
+                                                {"source.0.curve", "false"},
+                                                {"source.1.endpoint", "tcp://y"},
+                                                {"source.1.topics", ""},
+                                                {"source.1.curve", "true"}}));
+
+  // Every field of every message type embedded has protoc's json_name (TactileFrame's
+  // measure_time_us is measureTimeUs).
+  for (const auto& [id, schema] : p.schemas) {
+    google::protobuf::FileDescriptorSet set;
+    ASSERT_TRUE(set.ParseFromString(schema.second));
+    int fields = 0;
+    for (const auto& file_proto : set.file()) {
+      for (const auto& type : file_proto.message_type())
+        fields += expect_json_names(type, file_proto.package() + "." + type.name());
+    }
+    EXPECT_GT(fields, 10) << schema.first;
+  }
+  EXPECT_NE(p.schemas.begin()->second.second.find("measureTimeUs"), std::string::npos);
 
   // Decode each message with a pool built only from its schema's FileDescriptorSet.
   std::map<std::uint16_t, std::vector<std::string>> text;

@@ -1,7 +1,14 @@
 // Reads an MCAP file with @mcap/core, by its index (as Foxglove opens a local file) and front to
 // back with CRC checks, decodes every message with protobufjs from the schema embedded in the file
 // (Root.fromDescriptor over the FileDescriptorSet, as Foxglove does) and prints what it saw as one
-// JSON object. zstd chunks are decompressed by the zstd command, not by our code.
+// JSON object, with the Metadata records. zstd chunks are decompressed by the zstd command, not by
+// our code.
+//
+// Message fields are named by the json_name the embedded descriptors give them, as a reader that
+// expects protoc's descriptor sets does (protoc fills json_name for every field: measureTimeUs
+// for measure_time_us): a field without one is an error, so a file whose descriptors lack them
+// fails here. protobufjs itself ignores json_name (it names fields as declared), so the names are
+// mapped here from the descriptors, not taken from protobufjs.
 //
 // node check_mcap.mjs FILE.mcap
 import { execFileSync } from "node:child_process";
@@ -34,15 +41,46 @@ const readable = {
   },
 };
 
-const reader = await McapIndexedReader.Initialize({ readable, decompressHandlers });
-const types = new Map();  // schema id -> protobufjs Type
-for (const [id, schema] of reader.schemasById) {
-  if (schema.encoding !== "protobuf") throw new Error(`schema ${schema.name}: encoding ${schema.encoding}`);
-  const root = protobuf.Root.fromDescriptor(descriptor.FileDescriptorSet.decode(schema.data));
-  types.set(id, root.lookupType(schema.name));
+// "tactile.v1.TactileFrame.measure_time_us" -> "measureTimeUs", for every field of every message
+// type (nested ones too) of a FileDescriptorSet; a field without json_name maps to undefined.
+function jsonNames(set) {
+  const names = new Map();
+  const add = (scope, type) => {
+    for (const f of type.field ?? []) names.set(`${scope}.${type.name}.${f.name}`, f.jsonName || undefined);
+    for (const nested of type.nestedType ?? []) add(`${scope}.${type.name}`, nested);
+  };
+  for (const file of set.file) for (const type of file.messageType ?? []) add(file.package, type);
+  return names;
 }
 
-const out = { header: reader.header, channels: {}, statistics: {}, indexed: {}, stream: {}, messages: {} };
+// A decoded message as a plain object keyed by its fields' json_names (nested messages too).
+function byJsonName(type, object, names) {
+  const out = {};
+  for (const field of type.fieldsArray) {
+    const full = `${type.fullName.replace(/^\./, "")}.${field.name}`;
+    const key = names.get(full);
+    if (key === undefined) throw new Error(`${full}: no json_name in the embedded descriptor`);
+    let value = object[field.name];
+    field.resolve();
+    if (field.resolvedType instanceof protobuf.Type && value !== undefined && value !== null) {
+      const sub = field.resolvedType;
+      value = field.repeated ? value.map((v) => byJsonName(sub, v, names)) : byJsonName(sub, value, names);
+    }
+    out[key] = value;
+  }
+  return out;
+}
+
+const reader = await McapIndexedReader.Initialize({ readable, decompressHandlers });
+const types = new Map();  // schema id -> { type: protobufjs Type, names: jsonNames() }
+for (const [id, schema] of reader.schemasById) {
+  if (schema.encoding !== "protobuf") throw new Error(`schema ${schema.name}: encoding ${schema.encoding}`);
+  const set = descriptor.FileDescriptorSet.decode(schema.data);
+  const root = protobuf.Root.fromDescriptor(set);
+  types.set(id, { type: root.lookupType(schema.name), names: jsonNames(set) });
+}
+
+const out = { header: reader.header, channels: {}, statistics: {}, indexed: {}, stream: {}, messages: {}, metadata: {} };
 for (const [id, ch] of reader.channelsById) {
   out.channels[ch.topic] = { schema: reader.schemasById.get(ch.schemaId).name, encoding: ch.messageEncoding };
 }
@@ -51,14 +89,17 @@ out.statistics = {
   messageCount: Number(stats.messageCount),
   chunkCount: stats.chunkCount,
   perTopic: Object.fromEntries([...stats.channelMessageCounts].map(([id, n]) => [reader.channelsById.get(id).topic, Number(n)])),
+  metadataCount: stats.metadataCount,
 };
+for await (const m of reader.readMetadata()) out.metadata[m.name] = Object.fromEntries(m.metadata);
 out.chunkCompression = [...new Set(reader.chunkIndexes.map((c) => c.compression))];
 
 for await (const m of reader.readMessages({ validateCrcs: true })) {
   const topic = reader.channelsById.get(m.channelId).topic;
   out.indexed[topic] = (out.indexed[topic] ?? 0) + 1;
-  const type = types.get(reader.channelsById.get(m.channelId).schemaId);
-  const body = type.toObject(type.decode(m.data), { longs: String, enums: String, bytes: String, defaults: true });
+  const { type, names } = types.get(reader.channelsById.get(m.channelId).schemaId);
+  const decoded = type.toObject(type.decode(m.data), { longs: String, enums: String, bytes: String, defaults: true });
+  const body = byJsonName(type, decoded, names);
   if (body.pixels !== undefined) body.pixels = Buffer.from(body.pixels, "base64").length;  // keep the output small
   (out.messages[topic] ??= []).push({ logTime: m.logTime.toString(), publishTime: m.publishTime.toString(), sequence: m.sequence, body });
 }
@@ -74,6 +115,7 @@ for (let r; (r = stream.nextRecord()); ) {
     const topic = streamChannels.get(r.channelId);
     out.stream[topic] = (out.stream[topic] ?? 0) + 1;
   }
+  if (r.type === "Metadata") out.streamMetadata = [...(out.streamMetadata ?? []), r.name];
   if (r.type === "Footer") footer = true;
 }
 if (!footer || !stream.done()) throw new Error("the stream reader did not reach the footer");

@@ -1,7 +1,8 @@
 """tactile_mcap checked by an independent reader: a run recorded from the real programs
 (fake_run.py) is exported to MCAP, then read by npm's @mcap/core under Node and decoded with
 protobufjs from the descriptors embedded in the file (check_mcap.mjs, as Foxglove reads it); the
-messages per channel and their fields must equal what our own Python reader sees in the log.
+messages per channel and their fields, named by the json_name protoc gives them (measureTimeUs),
+must equal what our own Python reader sees in the log, and the log's header is a Metadata record.
 Also the command line: --help, a bad option, an existing output, a damaged log (nothing written).
 
 Run by ctest with PYTHONPATH=BUILD/tools/python:tests/integration/tools/python and TACTILE_MCAP,
@@ -42,6 +43,7 @@ class McapExportTest(unittest.TestCase):
         fake_run.record(cls.dir, cls.log)
         with LogReader(cls.log) as r:
             cls.records = list(r)
+            cls.header = r.header
 
     @classmethod
     def tearDownClass(cls):
@@ -72,25 +74,44 @@ class McapExportTest(unittest.TestCase):
                     "raw/left": {"schema": "tactile.v1.RawFrame", "encoding": "protobuf"},
                     "event": {"schema": "tactile.v1.Event", "encoding": "protobuf"}})
                 self.assertTrue(seen["header"]["library"].startswith("tactile_mcap"))
+                self.assertEqual(seen["statistics"]["metadataCount"], 1)
+                self.assertEqual(seen["streamMetadata"], ["tactile_log_header"])
+                h = self.header
+                expected = {"format": h.format, "created_ns": str(h.created_ns), "writer": h.writer,
+                            "host": h.host, "note": h.note, "log_file": "run.tlog"}
+                for i, source in enumerate(h.sources):
+                    expected[f"source.{i}.endpoint"] = source.endpoint
+                    expected[f"source.{i}.topics"] = ",".join(source.topics)
+                    expected[f"source.{i}.curve"] = "true" if source.curve else "false"
+                self.assertEqual(seen["metadata"], {"tactile_log_header": expected})
+                self.assertEqual(h.format, "tactile-log/1")
+                self.assertTrue(h.writer.startswith("tactile_record"))
+                self.assertGreater(h.created_ns, 0)
                 for topic, records in ours.items():
                     got = seen["messages"][topic]
                     for rec, m in zip(records, got):
                         self.assertEqual(int(m["logTime"]), rec.receive_time_ns)
                         body = rec.decode()
+                        # Fields by protoc's json_name (lowerCamelCase), nested messages too.
                         if topic == "frame/left":
                             self.assertEqual(int(m["body"]["sequence"]), body.sequence)
                             self.assertEqual(int(m["publishTime"]), body.publish_timestamp_ns)
+                            self.assertEqual(int(m["body"]["publishTimestampNs"]), body.publish_timestamp_ns)
+                            self.assertEqual(m["body"]["sensorId"], body.sensor_id)
+                            self.assertEqual(m["body"]["measureTimeUs"], body.measure_time_us)
                             self.assertEqual(m["body"]["status"], "FRAME_STATUS_COMPLETE")
-                            self.assertEqual([e["fz_n"] for e in m["body"]["elements"]],
+                            self.assertEqual([e["fzN"] for e in m["body"]["elements"]],
                                              [e.fz_n for e in body.elements])
                             self.assertEqual([e["contact"] for e in m["body"]["elements"]],
                                              [e.contact for e in body.elements])
                         elif topic == "event":
                             self.assertEqual(m["body"]["text"], body.text)
+                            self.assertEqual(int(m["body"]["timeNs"]), body.time_ns)
                             self.assertEqual(int(m["publishTime"]), body.time_ns)
                         else:
                             self.assertEqual(m["body"]["kind"], log_kind_name(body.kind))
-                            self.assertEqual(int(m["body"]["tactile_sequence"]), body.tactile_sequence)
+                            self.assertEqual(int(m["body"]["tactileSequence"]), body.tactile_sequence)
+                            self.assertEqual(int(m["body"]["cameraFrameId"]), body.camera_frame_id)
                             self.assertEqual(m["body"]["pixels"], len(body.pixels))
                             self.assertEqual((m["body"]["width"], m["body"]["height"]), (body.width, body.height))
 

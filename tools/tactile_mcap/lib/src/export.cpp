@@ -19,7 +19,10 @@ void add_file(const gp::FileDescriptor& file, std::set<std::string>& seen,
   if (!seen.insert(file.name()).second) return;
   for (int i = 0; i < file.dependency_count(); ++i)
     add_file(*file.dependency(i), seen, set);
-  file.CopyTo(set.add_file());
+  gp::FileDescriptorProto* proto = set.add_file();
+  file.CopyTo(proto);
+  // CopyTo leaves json_name out; protoc's descriptor sets (and Foxglove's own) carry it.
+  file.CopyJsonNameTo(proto);
 }
 
 std::uint64_t unsigned_time(std::int64_t ns) {
@@ -33,6 +36,25 @@ std::string file_descriptor_set(const gp::Descriptor& message) {
   std::set<std::string> seen;
   add_file(*message.file(), seen, set);
   return set.SerializeAsString();
+}
+
+std::map<std::string, std::string> log_header_metadata(const v1::LogHeader& header,
+                                                       const std::string& log_file) {
+  std::map<std::string, std::string> m{
+      {"format", header.format()}, {"created_ns", std::to_string(header.created_ns())},
+      {"writer", header.writer()}, {"host", header.host()},
+      {"note", header.note()},     {"log_file", log_file}};
+  for (int i = 0; i < header.sources_size(); ++i) {
+    const v1::LogSource& source = header.sources(i);
+    const std::string key = "source." + std::to_string(i) + ".";
+    std::string topics;
+    for (const std::string& t : source.topics())
+      topics += (topics.empty() ? "" : ",") + t;
+    m[key + "endpoint"] = source.endpoint();
+    m[key + "topics"] = topics;
+    m[key + "curve"] = source.curve() ? "true" : "false";
+  }
+  return m;
 }
 
 std::int64_t own_time_ns(const gp::Message& message) {
@@ -50,6 +72,8 @@ std::int64_t own_time_ns(const gp::Message& message) {
 ExportResult export_log(recording::LogReader& in, const Writer::Sink& sink,
                         const ExportOptions& options) {
   Writer writer(sink, options.writer);
+  writer.add_metadata(kLogHeaderMetadata,
+                      log_header_metadata(in.header(), in.path().filename().string()));
   ExportResult result;
   std::map<const gp::Descriptor*, std::uint16_t> schemas;
   std::map<std::pair<std::string, const gp::Descriptor*>, std::uint16_t> channels;

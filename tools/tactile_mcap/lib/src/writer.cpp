@@ -22,6 +22,8 @@ enum Opcode : std::uint8_t {
   kMessageIndex = 0x07,
   kChunkIndex = 0x08,
   kStatistics = 0x0B,
+  kMetadata = 0x0C,
+  kMetadataIndex = 0x0D,
   kSummaryOffset = 0x0E,
   kDataEnd = 0x0F,
 };
@@ -35,6 +37,15 @@ void put(std::string& out, T value) {
 void put_string(std::string& out, std::string_view s) {
   put<std::uint32_t>(out, static_cast<std::uint32_t>(s.size()));
   out.append(s);
+}
+// Map<string, string>: the pairs' byte length, then key and value of each pair.
+void put_map(std::string& out, const std::map<std::string, std::string>& map) {
+  std::string pairs;
+  for (const auto& [k, v] : map) {
+    put_string(pairs, k);
+    put_string(pairs, v);
+  }
+  put_string(out, pairs);
 }
 
 constexpr std::array<std::uint32_t, 256> make_crc_table() {
@@ -124,16 +135,27 @@ std::uint16_t Writer::add_channel(std::uint16_t schema_id, std::string_view topi
   put<std::uint16_t>(c, schema_id);
   put_string(c, topic);
   put_string(c, message_encoding);
-  std::string map;
-  for (const auto& [k, v] : metadata) {
-    put_string(map, k);
-    put_string(map, v);
-  }
-  put_string(c, map);
+  put_map(c, metadata);
   append_to_chunk(kChannel, c);
   channels_.push_back(std::move(c));
   channel_counts_[id] = 0;
   return id;
+}
+
+void Writer::add_metadata(std::string_view name,
+                          const std::map<std::string, std::string>& metadata) {
+  if (finished_) throw std::logic_error("MCAP writer: add_metadata after finish");
+  close_chunk();
+  std::string m;
+  put_string(m, name);
+  put_map(m, metadata);
+  const std::uint64_t at = offset_;
+  emit_record(kMetadata, m);
+  std::string index;
+  put<std::uint64_t>(index, at);
+  put<std::uint64_t>(index, offset_ - at);
+  put_string(index, name);
+  metadata_indexes_.push_back(std::move(index));
 }
 
 void Writer::write_message(std::uint16_t channel_id, std::uint32_t sequence, std::uint64_t log_time,
@@ -256,7 +278,7 @@ void Writer::finish() {
   put<std::uint16_t>(stats, static_cast<std::uint16_t>(schemas_.size()));
   put<std::uint32_t>(stats, static_cast<std::uint32_t>(channels_.size()));
   put<std::uint32_t>(stats, 0);  // attachments
-  put<std::uint32_t>(stats, 0);  // metadata
+  put<std::uint32_t>(stats, static_cast<std::uint32_t>(metadata_indexes_.size()));
   put<std::uint32_t>(stats, chunk_count_);
   put<std::uint64_t>(stats, message_count_ > 0 ? start_time_ : 0);
   put<std::uint64_t>(stats, message_count_ > 0 ? end_time_ : 0);
@@ -267,6 +289,7 @@ void Writer::finish() {
   }
   put_string(stats, counts);
   group(kStatistics, {stats});
+  group(kMetadataIndex, metadata_indexes_);
   group(kChunkIndex, chunk_indexes_);
 
   const std::uint64_t summary_offset_start = offset_;

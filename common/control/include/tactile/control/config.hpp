@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <numbers>
 #include <optional>
+#include <string>
 #include <string_view>
 
 #include "tactile/geometry.hpp"
@@ -32,6 +33,11 @@ std::optional<SlipDetectorKind> slip_detector_from_string(std::string_view name)
 // The names slip_detector_from_string accepts, for error messages.
 inline constexpr const char* kSlipDetectorNames = "paper, field or learned";
 
+// Which grip the controller keeps: today only the paper's (close to F1, re-compress on SLIP, back
+// off on OVER; docs/control.md). Every run names it beside the slip detector.
+enum class GripKind : std::uint8_t { kPaper };
+const char* to_string(GripKind k);
+
 struct Config {
   Task task = Task::kGraspMoveTwist;
 
@@ -53,6 +59,8 @@ struct Config {
   // the sweep (docs/slip.md, "Results"); kPaper is the paper's rule (an element slips when its
   // centroid moves more than dr in a frame) and reproduces the paper's experiment.
   SlipDetectorKind slip_detector = SlipDetectorKind::kLearned;
+  // The grip: the paper's, the only one so far (no configuration key yet).
+  GripKind grip = GripKind::kPaper;
   // The field detector's parameters (docs/slip.md). An element moving more than dr counts as
   // slipping only when loaded beyond this fraction of the friction estimate (Cattaneo-Mindlin
   // partial slip), or when it was slipping.
@@ -164,5 +172,9 @@ struct Config {
   // Throws std::invalid_argument naming the first bad field and its value.
   void validate() const;
 };
+
+// "slip detector: learned, grip: paper": which slip detector and which grip a controller of this
+// configuration runs, as hand_node and the rig say it in their first lines.
+std::string describe_controller(const Config& c);
 
 }  // namespace tactile::control

@@ -259,6 +259,14 @@ class Figure {
   // A vertical marker at x in every panel; the text is written in the top panel only.
   Figure& mark(double x, std::string text = {}, Style style = {});
 
+  // Sets the picture's height (the width stays) so that the equal-aspect panels' ranges fill
+  // their plot areas instead of one axis being widened to keep the aspect: the panel that needs
+  // the most height for its share gets exactly its ranges, the others a y range a little wider.
+  // For a layout drawn to scale (a fingertip's elements) in a picture of another shape. The
+  // height stays within 64..max_height_px; a figure without equal-aspect panels keeps its own.
+  // Call it once the panels hold their series and ranges.
+  Figure& fit_height_to_aspect(int max_height_px = 4000);
+
   int width() const { return width_; }
   int height() const { return height_; }
 

@@ -132,6 +132,13 @@ struct Report {
   bool opened_in_air = false;
   // Whether the hand can hold this cap within F2 (truth: weight, peak acceleration, mu_s).
   HoldNeed hold;
+  // The controller the run scored: its slip detector and its grip (control::to_string of the
+  // scenario's controller configuration), written last as `controller`.
+  struct Controller {
+    std::string slip_detector = "paper";
+    std::string grip = "paper";
+  };
+  Controller controller;
   // Ours.
   std::uint64_t seed = 0;
   double sim_time_s = 0;

@@ -9,6 +9,7 @@
 //   timeline.png        flags, forces, centroid change, cap angle, events against time
 //                       (tactile::plot::timeline);
 //   latency.png         real-time runs: camera timestamp -> ArmCommand received.
+#include <array>
 #include <filesystem>
 #include <span>
 #include <vector>
@@ -24,6 +25,12 @@ namespace tactile::rig {
 std::vector<std::filesystem::path> write_plots(const LockstepResult& run,
                                                const control::Config& controller,
                                                const std::filesystem::path& dir);
+
+// A shear-<n>-<label>.png figure: both fingertips' elements at one moment, their shear
+// displacement u as arrows (x40, red where the controller's detector said SLIP), each panel's
+// axes the elements' layout with a margin, drawn to scale and filling its panel.
+plot::Figure shear_figure(const Snapshot& snap,
+                          const std::array<Calibration, kFingertips>& calibrations);
 
 // The latency histogram: the bulk of the samples on the x axis (a machine's pause of tens of
 // milliseconds counted at the edge), p50 and p99 drawn where they fall inside it and named in

@@ -4,8 +4,9 @@
 // channel per topic (and message type), the Envelope unwrapped so that each message is the
 // TactileFrame, SensorStats, Event, Decision, GroundTruth, ArmCommand, ArmState or Heartbeat it
 // carries, raw camera frames as tactile.v1.RawFrame; every schema embedded as a FileDescriptorSet
-// (schema encoding "protobuf", message encoding "protobuf"). log_time is the record's receive
-// time, publish_time the message's own time where it has one (docs/recording.md#mcap-export).
+// (schema encoding "protobuf", message encoding "protobuf") with every field's json_name, as protoc
+// writes it; the log's header as a Metadata record. log_time is the record's receive time,
+// publish_time the message's own time where it has one (docs/recording.md#mcap-export).
 #include <google/protobuf/descriptor.h>
 #include <google/protobuf/message.h>
 
@@ -21,8 +22,20 @@
 namespace tactile::mcap {
 
 // A serialized google.protobuf.FileDescriptorSet of the file that defines `message` and every
-// file it imports, dependencies first: what an MCAP "protobuf" schema holds.
+// file it imports, dependencies first: what an MCAP "protobuf" schema holds. Every field carries
+// its json_name (lowerCamelCase of its name), as in the sets protoc writes: readers that name
+// fields by it (JSON, protobuf-es) then name them as for protoc's descriptors.
 std::string file_descriptor_set(const google::protobuf::Descriptor& message);
+
+// The name of the Metadata record that holds the log's header.
+inline constexpr const char* kLogHeaderMetadata = "tactile_log_header";
+
+// The log's header (docs/recording.md, LogHeader) as the Metadata record's pairs: format,
+// created_ns, writer, host, note, the log file's name (log_file), and per source i (from 0)
+// source.i.endpoint, source.i.topics (comma-separated prefixes; "" for every topic) and
+// source.i.curve ("true"/"false").
+std::map<std::string, std::string> log_header_metadata(const v1::LogHeader& header,
+                                                       const std::string& log_file);
 
 // The message's own time in ns (publish_timestamp_ns of a TactileFrame, time_ns of an Event...),
 // or 0 when it has none.

@@ -3,11 +3,12 @@
 // A writer of MCAP files (https://mcap.dev/spec, major version 0): the records written by hand,
 // so that a recording opens in Foxglove and PlotJuggler without an MCAP library.
 //
-// The file it writes: magic, Header, then chunks (Schema, Channel and Message records, zstd or
-// uncompressed) each followed by a Message Index per channel, Data End with the data section's
-// CRC, a summary section (every Schema, every Channel, one Statistics, a Chunk Index per chunk,
-// grouped by opcode), a Summary Offset per group, the Footer with the summary's CRC, magic. A
-// reader can therefore open it by its index (footer -> summary -> chunk) or read it front to back.
+// The file it writes: magic, Header, then Metadata records and chunks (Schema, Channel and Message
+// records, zstd or uncompressed) each followed by a Message Index per channel, Data End with the
+// data section's CRC, a summary section (every Schema, every Channel, one Statistics, a Metadata
+// Index per Metadata record, a Chunk Index per chunk, grouped by opcode), a Summary Offset per
+// group, the Footer with the summary's CRC, magic. A reader can therefore open it by its index
+// (footer -> summary -> chunk) or read it front to back.
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -55,6 +56,9 @@ class Writer {
   // One message on a channel; times in ns (publish_time: the log time when there is no other).
   void write_message(std::uint16_t channel_id, std::uint32_t sequence, std::uint64_t log_time,
                      std::uint64_t publish_time, std::string_view data);
+  // A Metadata record (name and key/value pairs), written between chunks: the open chunk is
+  // closed first. Indexed in the summary by a Metadata Index.
+  void add_metadata(std::string_view name, const std::map<std::string, std::string>& metadata);
   // Closes the last chunk and writes the data end, the summary, the footer and the magic.
   void finish();
 
@@ -77,6 +81,7 @@ class Writer {
   std::vector<std::string> schemas_;   // Schema record contents, by id - 1
   std::vector<std::string> channels_;  // Channel record contents, by id - 1
   std::vector<std::string> chunk_indexes_;
+  std::vector<std::string> metadata_indexes_;
 
   // The open chunk.
   std::string chunk_;
