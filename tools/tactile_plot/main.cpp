@@ -16,6 +16,7 @@
 #include "tactile/util/clock.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
+#include "viewer.hpp"
 
 namespace {
 
@@ -32,6 +33,7 @@ struct Options {
   double f1 = tactile::control::Config{}.f1_n;
   double f2 = tactile::control::Config{}.f2_n;
   double dr = tactile::control::Config{}.dr_mm;
+  std::string recompute;
   int width = 1000;
   int height = 700;
   std::string log_level = "info";
@@ -64,6 +66,7 @@ int run(const Options& opt) {
   po.control.f1_n = opt.f1;
   po.control.f2_n = opt.f2;
   po.control.dr_mm = opt.dr;
+  po.recompute = tactile::live::recompute_detector(opt.recompute);
   po.width = opt.width;
   po.height = opt.height;
   std::vector<std::string> warnings;
@@ -125,6 +128,7 @@ int run(const Options& opt) {
     written.insert(written.end(), files.begin(), files.end());
   };
   if (figures.count("shear") != 0) add(tactile::plots::draw_shear_fields(data, opt.out));
+  std::printf("%s\n", data.flag_source_text().c_str());
   if (figures.count("fig10") != 0) {
     add(tactile::plots::draw_fig10(data, opt.out));
     std::printf("Fig. 10 fingertip x: %s\n", data.position_source_text().c_str());
@@ -166,9 +170,10 @@ int main(int argc, char** argv) {
          "--calibration", opt.calibrations,
          "calibration files: element positions for the maps (default: mean centroids in the log)")
       ->allow_extra_args(false);
-  app.add_option("--f1", opt.f1, "F1 [N] for the TOUCH flag")->capture_default_str();
-  app.add_option("--f2", opt.f2, "F2 [N] for the OVER flag")->capture_default_str();
-  app.add_option("--dr", opt.dr, "dr [mm] for the SLIP flag")->capture_default_str();
+  app.add_option("--f1", opt.f1, "F1 [N] for TOUCH with --recompute")->capture_default_str();
+  app.add_option("--f2", opt.f2, "F2 [N] for OVER with --recompute")->capture_default_str();
+  app.add_option("--dr", opt.dr, "dr [mm] for SLIP with --recompute")->capture_default_str();
+  tactile::live::add_recompute_option(app, opt.recompute, "no arm motion used; titles say so");
   app.add_option("--width", opt.width, "picture width in pixels")->capture_default_str();
   app.add_option("--height", opt.height, "picture height in pixels")->capture_default_str();
   tactile::cli::add_log_level(app, opt.log_level);

@@ -55,7 +55,9 @@ int run(const Options& opt) {
   tactile::recording::Sources sources(ctx, so);
 
   const tactile::control::Config cc = tactile::live::flag_thresholds(opt.viewer);
-  tactile::live::LiveModel model({cc, opt.events}, tactile::live::endpoints_of(sources));
+  tactile::live::LiveModel model(
+      {cc, opt.events, tactile::live::recompute_detector(opt.viewer.recompute)},
+      tactile::live::endpoints_of(sources));
   tactile::web::SnapshotWriter writer(std::move(cals), cc);
   tactile::web::UpdateSlot slot;
   tactile::web::WebServer server(web, slot);
@@ -156,7 +158,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   tactile::cli::add_log_level(app, opt.log_level);
   return tactile::cli::run(app, argc, argv, [&] {
-    tactile::live::require_endpoints(opt.viewer);
+    tactile::live::settle_endpoints(opt.viewer);
     return run(opt);
   });
 }

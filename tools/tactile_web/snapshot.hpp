@@ -43,6 +43,7 @@ class SnapshotWriter {
     std::vector<std::array<double, 2>> positions;
   };
   std::vector<Layout> layouts_;
+  std::string label_;  // the flags' label, escaped into the update
 };
 
 }  // namespace tactile::web

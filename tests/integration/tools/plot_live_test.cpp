@@ -127,6 +127,17 @@ void publish_until(wire::Publisher& frames, wire::Publisher& events, Done done) 
       e->set_text("re-compress");
       wire::encode(env, buf);
       events.send(wire::kEventTopic, wire::bytes_of(buf));
+      // hand_node's decision on this frame: element 4 of the left fingertip slips.
+      auto* d = env.mutable_decision();
+      d->Clear();
+      d->set_slip_detector("learned");
+      auto* t = d->add_fingertips();
+      t->set_sensor_id("left");
+      t->set_slip(true);
+      t->set_touch(true);
+      t->add_slipping_element_ids(4);
+      wire::encode(env, buf);
+      events.send(wire::kDecisionTopic, wire::bytes_of(buf));
     }
     ++k;
     std::this_thread::sleep_for(5ms);
@@ -142,7 +153,8 @@ TEST(Live, LineModeFollowsRealPublishers) {
     const std::string out = live.out_so_far();
     return out.find("right seq=") != std::string::npos &&
            out.find("RECOMPRESS left e4 re-compress") != std::string::npos &&
-           out.find("phase=TRANSPORT") != std::string::npos;
+           out.find("phase=TRANSPORT") != std::string::npos &&
+           out.find("by=hand_node") != std::string::npos;
   });
   live.signal(SIGINT);
   const auto r = live.wait(10s);
@@ -153,6 +165,10 @@ TEST(Live, LineModeFollowsRealPublishers) {
       << r.out;
   EXPECT_NE(r.out.find("event "), std::string::npos);
   EXPECT_NE(r.out.find("RECOMPRESS left e4 re-compress"), std::string::npos) << r.out;
+  // hand_node's decisions come on its events endpoint, topic decision: shown as decided there.
+  EXPECT_TRUE(std::regex_search(r.out, std::regex("left seq=\\d+ .* flags=TOUCH,SLIP slipping=4 "
+                                                  "by=hand_node detector=learned ")))
+      << r.out;
   EXPECT_EQ(r.out.find("\x1b"), std::string::npos);  // no escape codes into a pipe
 }
 

@@ -10,8 +10,10 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <regex>
 
 #include "tactile/control/config.hpp"
@@ -93,6 +95,19 @@ std::string fixed3(double v) {
   return b;
 }
 
+// The page at `url` in Debian's headless Chromium, its DOM on standard output. Chromium as root
+// needs --no-sandbox; a profile of its own leaves nothing behind. A page held by ?freeze= closes
+// its stream, so the virtual time runs out and the DOM is dumped.
+testing::ProcessResult page_dom(const std::string& url) {
+  TempDir profile;
+  Process chromium({"chromium", "--headless", "--no-sandbox", "--disable-gpu",
+                    "--user-data-dir=" + profile.path().string(), "--no-first-run",
+                    "--disable-extensions", "--disable-background-networking", "--disable-sync",
+                    "--disable-component-update", "--no-default-browser-check",
+                    "--virtual-time-budget=5000", "--dump-dom", url});
+  return chromium.wait(60s);
+}
+
 TEST(Web, ChromiumShowsTheRecordingsFlagsPhaseAndForcesAtAFrame) {
   TempDir dir;
   const auto log_path = dir / "run.tlog";
@@ -107,22 +122,15 @@ TEST(Web, ChromiumShowsTheRecordingsFlagsPhaseAndForcesAtAFrame) {
   const auto endpoint =
       await_match([&] { return replay.err_so_far(); }, "publishing on (tcp://\\S+)");
   ASSERT_TRUE(endpoint) << replay.err_so_far();
-  Process web({TACTILE_WEB_PATH, *endpoint, "--listen", "127.0.0.1:0"});
+  // The recording holds no hand_node Decisions: the page recomputes with the paper's rule, as
+  // asked, and says so.
+  Process web({TACTILE_WEB_PATH, *endpoint, "--listen", "127.0.0.1:0", "--recompute", "paper"});
   const auto url = await_match([&] { return web.out_so_far(); }, "serving (http://\\S+)");
   ASSERT_TRUE(url) << web.err_so_far();
   const auto played = replay.wait(20s);
   ASSERT_EQ(played.exit_code, 0) << played.err;
 
-  // Chromium as root needs --no-sandbox; a profile of its own leaves nothing behind. The page
-  // closes its stream once held, so the virtual time runs out and the DOM is dumped.
-  TempDir profile;
-  Process chromium({"chromium", "--headless", "--no-sandbox", "--disable-gpu",
-                    "--user-data-dir=" + profile.path().string(), "--no-first-run",
-                    "--disable-extensions", "--disable-background-networking", "--disable-sync",
-                    "--disable-component-update", "--no-default-browser-check",
-                    "--virtual-time-budget=5000", "--dump-dom",
-                    *url + "?freeze=" + std::to_string(kFrame)});
-  const auto shown = chromium.wait(60s);
+  const auto shown = page_dom(*url + "?freeze=" + std::to_string(kFrame));
   ASSERT_FALSE(shown.timed_out) << shown.err;
   ASSERT_EQ(shown.exit_code, 0) << shown.err;
   const std::string& dom = shown.out;
@@ -137,6 +145,8 @@ TEST(Web, ChromiumShowsTheRecordingsFlagsPhaseAndForcesAtAFrame) {
   EXPECT_EQ(text(dom, "phase"), "TRANSPORT");
   EXPECT_EQ(attribute(dom, "flag-MOVE", "data-on"), "1");
   EXPECT_EQ(attribute(dom, "flag-SEARCH", "data-on"), "0");
+  EXPECT_EQ(text(dom, "flags-by"), "flags: recomputed (paper)");
+  EXPECT_EQ(attribute(dom, "flags-by", "data-from"), "recomputed");
   EXPECT_EQ(attribute(dom, "events", "data-total"), "2");
   EXPECT_TRUE(std::regex_search(dom, std::regex("<li>[0-9:.]+ RECOMPRESS left e4 re-compress</li>"
                                                 "<li>[0-9:.]+ GRASPING_ENDED</li>")));
@@ -239,23 +249,61 @@ class RawClient {
   bool connected_ = false;
 };
 
+// The tools' recording played as fast as possible into a tactile_web (on a free port, with
+// `web_options`) that is its only subscriber besides the two the replay waits for.
+class ReplayedIntoWeb {
+ public:
+  explicit ReplayedIntoWeb(const std::vector<std::string>& web_options) {
+    const auto log_path = dir_ / "run.tlog";
+    tools_test::write_test_log(log_path, false);
+    replay_.emplace(std::vector<std::string>{TACTILE_REPLAY_PATH, log_path.string(), "--publish",
+                                             "tcp://127.0.0.1:*", "--as-fast-as-possible",
+                                             "--wait-subscriptions", "3", "--wait-timeout", "20"});
+    const auto endpoint =
+        await_match([&] { return replay_->err_so_far(); }, "publishing on (tcp://\\S+)");
+    if (!endpoint) {
+      error_ = replay_->err_so_far();
+      return;
+    }
+    std::vector<std::string> argv{TACTILE_WEB_PATH, *endpoint, "--listen", "127.0.0.1:0"};
+    argv.insert(argv.end(), web_options.begin(), web_options.end());
+    web_.emplace(argv);
+    const auto port =
+        await_match([&] { return web_->out_so_far(); }, "serving http://127.0.0.1:(\\d+)/");
+    if (!port) {
+      error_ = web_->err_so_far();
+      return;
+    }
+    port_ = std::stoi(*port);
+  }
+  bool started() const { return port_ > 0; }
+  const std::string& error() const { return error_; }
+  Process& replay() { return *replay_; }
+  Process& web() { return *web_; }
+  int port() const { return port_; }
+
+ private:
+  TempDir dir_;
+  std::optional<Process> replay_;
+  std::optional<Process> web_;
+  std::string error_;
+  int port_ = 0;
+};
+
+// GET /state: the latest update, as tactile_web holds it.
+std::string latest_update(int port) {
+  RawClient c(port, "GET /state HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
+  return c.read(2s);
+}
+
 // Two browsers that stopped reading hold the only two event streams: a third is refused (503),
 // and every message still goes through the model (GET /state counts them) while they hang.
 TEST(Web, StuckBrowsersNeverHoldUpTheSubscriberAndViewersAreBounded) {
-  TempDir dir;
-  const auto log_path = dir / "run.tlog";
-  tools_test::write_test_log(log_path, false);
-  Process replay({TACTILE_REPLAY_PATH, log_path.string(), "--publish", "tcp://127.0.0.1:*",
-                  "--as-fast-as-possible", "--wait-subscriptions", "3", "--wait-timeout", "20"});
-  const auto endpoint =
-      await_match([&] { return replay.err_so_far(); }, "publishing on (tcp://\\S+)");
-  ASSERT_TRUE(endpoint) << replay.err_so_far();
-  Process web({TACTILE_WEB_PATH, *endpoint, "--listen", "127.0.0.1:0", "--max-viewers", "2",
-               "--rate", "0"});
-  const auto port =
-      await_match([&] { return web.out_so_far(); }, "serving http://127.0.0.1:(\\d+)/");
-  ASSERT_TRUE(port) << web.err_so_far();
-  const int p = std::stoi(*port);
+  ReplayedIntoWeb run({"--max-viewers", "2", "--rate", "0"});
+  ASSERT_TRUE(run.started()) << run.error();
+  Process& replay = run.replay();
+  Process& web = run.web();
+  const int p = run.port();
   const std::string stream = "GET /stream HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
   RawClient stuck1(p, stream);
   RawClient stuck2(p, stream);
@@ -271,12 +319,8 @@ TEST(Web, StuckBrowsersNeverHoldUpTheSubscriberAndViewersAreBounded) {
   // 100 frames of two fingertips and 4 events, about 2 MB of updates for each stream: all taken
   // in while both stuck streams are still open (a stuck stream is let go only after 2 s of not
   // taking its update).
-  const auto taken = await_match(
-      [&] {
-        RawClient c(p, "GET /state HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
-        return c.read(2s);
-      },
-      "\"streams\":(\\d+),\"time_ns\":\\d+,\"messages\":204,", 10s);
+  const auto taken = await_match([&] { return latest_update(p); },
+                                 "\"streams\":(\\d+),\"time_ns\":\\d+,\"messages\":204,", 10s);
   ASSERT_TRUE(taken) << "tactile_web did not take in every message";
   EXPECT_EQ(*taken, "2");
   web.signal(SIGINT);
