@@ -79,6 +79,7 @@ int run(const Options& opt) {
   bool changed = true;
   tactile::web::UpdateCounters counters;
   std::string update;
+  std::string point;
   tactile::recording::Sources::Message m;
   while (!tactile::util::stop_requested()) {
     std::int64_t now = tactile::util::monotonic_ns();
@@ -90,7 +91,8 @@ int run(const Options& opt) {
       counters.coalesced = slot.coalesced();
       counters.streams = server.streams();
       writer.write(model.state(), counters, update);
-      slot.publish(update);
+      writer.write_point(model.state(), point);
+      slot.publish(update, point);
       changed = false;
       last_update = now;
       next_update += period;

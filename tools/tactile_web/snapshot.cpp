@@ -103,4 +103,22 @@ void SnapshotWriter::write(const live::LiveState& s, const UpdateCounters& c, st
   out += "]}";
 }
 
+void SnapshotWriter::write_point(const live::LiveState& s, std::string& out) const {
+  constexpr std::size_t kRoom = 512;
+  if (out.capacity() < kRoom) out.reserve(kRoom);
+  out.clear();
+  auto o = std::back_inserter(out);
+  fmt::format_to(o, R"({{"time_ns":{},"f2_n":{},"dr_mm":{},"fingertips":[)", s.now_ns,
+                 control_.f2_n, control_.dr_mm);
+  for (std::size_t i = 0; i < s.fingertips.size(); ++i) {
+    const live::FingertipView& f = s.fingertips[i];
+    if (i > 0) out += ',';
+    out += R"({"id":)";
+    append_string(out, f.id);
+    fmt::format_to(o, R"(,"max_fz_n":{},"max_slip_mm":{}}})", finite(f.max_fz_n),
+                   finite(f.max_slip_mm));
+  }
+  out += "]}";
+}
+
 }  // namespace tactile::web

@@ -328,5 +328,57 @@ TEST(Web, StuckBrowsersNeverHoldUpTheSubscriberAndViewersAreBounded) {
   EXPECT_EQ(stopped.exit_code, 0) << stopped.err;
 }
 
+// A page that joins after the stream ended: it shows the final state at once and its charts hold
+// the points of the updates before it joined (the 'history' event), not one point; without a
+// --recompute and without hand_node's Decisions in the recording, it says that no one decided.
+TEST(Web, APageThatJoinsLateFillsItsChartsAtOnce) {
+  ReplayedIntoWeb run({"--rate", "0"});
+  ASSERT_TRUE(run.started()) << run.error();
+  const auto played = run.replay().wait(20s);
+  ASSERT_EQ(played.exit_code, 0) << played.err;
+  const int p = run.port();
+  // Every message taken in before the page joins.
+  ASSERT_TRUE(await_match([&] { return latest_update(p); }, "\"messages\":(204),", 10s));
+
+  // The stream's first bytes: the charts' points before the latest update, then the update.
+  RawClient late(p, "GET /stream HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
+  const std::string got = late.read(1s, 1 << 20);
+  const std::string head = "event: history\ndata: [";
+  const auto from = got.find(head);
+  ASSERT_NE(from, std::string::npos) << got.substr(0, 400);
+  const auto to = got.find("]\n\n", from);
+  ASSERT_NE(to, std::string::npos);
+  const std::string history = got.substr(from + head.size(), to - from - head.size());
+  std::smatch m;
+  std::ptrdiff_t points = 0;
+  for (auto at = history.find("\"time_ns\":"); at != std::string::npos;
+       at = history.find("\"time_ns\":", at + 1))
+    ++points;
+  // One point per update before the one sent with it (an update after every message here), at
+  // most the 299 the page's charts keep besides it.
+  ASSERT_TRUE(std::regex_search(got, m, std::regex("data: \\{\"update\":(\\d+),")));
+  const long update = std::stol(m[1].str());
+  EXPECT_GE(update, 204);
+  EXPECT_EQ(points, std::min(update - 1, 299L)) << history.substr(0, 400);
+  EXPECT_NE(got.find("data: {\"update\":"), std::string::npos);
+  EXPECT_LT(got.find("event: history"), got.find("data: {\"update\":"));
+  EXPECT_NE(got.find("\"flags_from\":\"none\""), std::string::npos);
+
+  // The page in a browser: charts filled from the history, and no one's flags shown as decided.
+  const auto shown = page_dom("http://127.0.0.1:" + std::to_string(p) + "/?freeze=99");
+  ASSERT_FALSE(shown.timed_out) << shown.err;
+  ASSERT_EQ(shown.exit_code, 0) << shown.err;
+  EXPECT_EQ(attribute(shown.out, "fingertip-left", "data-sequence"), "99");
+  const std::string chart_points = attribute(shown.out, "side", "data-chart-points");
+  EXPECT_GE(std::atoi(chart_points.c_str()), 200) << chart_points;  // without history: 1
+  EXPECT_EQ(attribute(shown.out, "fingertip-left", "data-decided"), "0");
+  EXPECT_NE(text(shown.out, "flags-by").find("flags: no decisions from hand_node"),
+            std::string::npos)
+      << text(shown.out, "flags-by");
+
+  run.web().signal(SIGINT);
+  EXPECT_EQ(run.web().wait(10s).exit_code, 0);
+}
+
 }  // namespace
 }  // namespace tactile

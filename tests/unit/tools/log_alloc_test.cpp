@@ -147,6 +147,7 @@ TEST(WebUpdateAlloc, FramesUpdatesAndAViewerAllocateNothingInSteadyState) {
     }
   }
   std::string update;
+  std::string point;
   std::string viewer;
   std::uint64_t seen = 0;
   web::UpdateCounters counters;
@@ -158,7 +159,8 @@ TEST(WebUpdateAlloc, FramesUpdatesAndAViewerAllocateNothingInSteadyState) {
     m.tick(static_cast<std::int64_t>(k) * 10'000'000, 1'763'700'000'000'000'000);
     ++counters.update;
     writer.write(m.state(), counters, update);
-    slot.publish(update);
+    writer.write_point(m.state(), point);
+    slot.publish(update, point);
     (void)slot.wait_newer(seen, viewer, std::chrono::milliseconds(0));
   };
   for (std::size_t k = 0; k < 20; ++k)

@@ -70,7 +70,8 @@ function push(plot, label, x, y, colour) {
 
 function threshold(plot, label, x, y) { push(plot, label, x, y, '#9e9e9e'); }
 
-// One point of the rolling charts, from an update.
+// One point of the rolling charts: an update, or one of the points tactile_web kept of the
+// updates before this page joined (the 'history' event: same names).
 let chartPoints = 0;
 function plotPoint(p) {
   if (t0 === null) t0 = p.time_ns;
@@ -274,6 +275,11 @@ stream.addEventListener('end', () => {
   status.textContent = 'tactile_web stopped';
   status.className = 'status lost';
   document.body.dataset.ended = '1';
+});
+stream.addEventListener('history', (m) => {
+  if (frozen) return;
+  for (const p of JSON.parse(m.data)) plotPoint(p);
+  redrawCharts();
 });
 stream.onmessage = (m) => {
   if (frozen) return;
