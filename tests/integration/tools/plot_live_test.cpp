@@ -64,6 +64,31 @@ TEST(Plot, WithoutPositionsFig10IsAgainstTimeAndSaysSo) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "timeline.png"));
 }
 
+// The flags drawn are hand_node's, and the program says who decided them: hand_node's detector,
+// nobody (a log without Decisions), or the detector --recompute names.
+TEST(Plot, SaysWhoDecidedTheFlags) {
+  TempDir dir;
+  write_test_log(dir / "decided.tlog", false, true, true);
+  write_test_log(dir / "frames.tlog", false);
+  const auto plot = [&](const std::string& log, std::vector<std::string> extra) {
+    std::vector<std::string> argv{TACTILE_PLOT_PATH,      (dir / log).string(), "-o",
+                                  (dir / "out").string(), "--figure",           "timeline"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    const auto r = testing::run(argv, 60s);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.out;
+  };
+  EXPECT_NE(plot("decided.tlog", {}).find("flags: hand_node (learned)\n"), std::string::npos);
+  EXPECT_NE(plot("frames.tlog", {}).find("no hand_node decisions in the log: no flags"),
+            std::string::npos);
+  EXPECT_NE(plot("decided.tlog", {"--recompute", "field"}).find("flags: recomputed (field)\n"),
+            std::string::npos);
+  const auto r =
+      testing::run({TACTILE_PLOT_PATH, (dir / "frames.tlog").string(), "--recompute", "papers"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("must be paper, field or learned"), std::string::npos) << r.err;
+}
+
 TEST(Plot, AtPastTheEndIsAnErrorNamingTheRecordingsTimeRange) {
   TempDir dir;
   write_test_log(dir / "run.tlog", true);

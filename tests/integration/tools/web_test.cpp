@@ -46,7 +46,8 @@ bool slipping(const v1::ElementReading& e, const control::Config& c) {
 // The fingertip's frame `kFrame` as the recording holds it, and its flags by the paper's rules
 // as docs/control.md states them (TOUCH: some F_z > F1 or SLIP; SLIP: some element slipping;
 // OVER: some F_z > F2), with the thresholds tactile_web runs with by default, outside Phase II.
-Expected expected_from(const tools_test::LogContents& log, const std::string& sensor) {
+Expected expected_from(const tools_test::LogContents& log, const std::string& sensor,
+                       std::uint64_t frame = kFrame) {
   const control::Config c;
   Expected x;
   wire::EnvelopeDecoder decoder;
@@ -54,7 +55,7 @@ Expected expected_from(const tools_test::LogContents& log, const std::string& se
     if (rec.topic() != wire::frame_topic(sensor)) continue;
     EXPECT_EQ(decoder.decode(wire::bytes_of(rec.payload())), wire::DecodeStatus::kOk);
     const v1::TactileFrame& f = decoder.envelope().tactile_frame();
-    if (f.sequence() != kFrame) continue;
+    if (f.sequence() != frame) continue;
     for (const auto& e : f.elements()) {
       if (e.id() == kElement) {
         x.element = e;
@@ -68,7 +69,7 @@ Expected expected_from(const tools_test::LogContents& log, const std::string& se
     x.touch = x.touch || x.slip;
     return x;
   }
-  ADD_FAILURE() << "no frame " << kFrame << " of " << sensor << " in the recording";
+  ADD_FAILURE() << "no frame " << frame << " of " << sensor << " in the recording";
   return x;
 }
 
@@ -253,12 +254,23 @@ class RawClient {
 // `web_options`) that is its only subscriber besides the two the replay waits for.
 class ReplayedIntoWeb {
  public:
-  explicit ReplayedIntoWeb(const std::vector<std::string>& web_options) {
-    const auto log_path = dir_ / "run.tlog";
-    tools_test::write_test_log(log_path, false);
-    replay_.emplace(std::vector<std::string>{TACTILE_REPLAY_PATH, log_path.string(), "--publish",
-                                             "tcp://127.0.0.1:*", "--as-fast-as-possible",
-                                             "--wait-subscriptions", "3", "--wait-timeout", "20"});
+  // `replay_options` added to tactile_replay's; `with_decisions`: hand_node's Decisions in the
+  // recording (tools_test::write_test_log).
+  explicit ReplayedIntoWeb(const std::vector<std::string>& web_options,
+                           const std::vector<std::string>& replay_options = {},
+                           bool with_decisions = false) {
+    tools_test::write_test_log(log_path(), false, true, with_decisions);
+    std::vector<std::string> replay{TACTILE_REPLAY_PATH,
+                                    log_path().string(),
+                                    "--publish",
+                                    "tcp://127.0.0.1:*",
+                                    "--as-fast-as-possible",
+                                    "--wait-subscriptions",
+                                    "3",
+                                    "--wait-timeout",
+                                    "20"};
+    replay.insert(replay.end(), replay_options.begin(), replay_options.end());
+    replay_.emplace(replay);
     const auto endpoint =
         await_match([&] { return replay_->err_so_far(); }, "publishing on (tcp://\\S+)");
     if (!endpoint) {
@@ -281,6 +293,7 @@ class ReplayedIntoWeb {
   Process& replay() { return *replay_; }
   Process& web() { return *web_; }
   int port() const { return port_; }
+  std::filesystem::path log_path() const { return dir_ / "run.tlog"; }
 
  private:
   TempDir dir_;
@@ -376,6 +389,34 @@ TEST(Web, APageThatJoinsLateFillsItsChartsAtOnce) {
             std::string::npos)
       << text(shown.out, "flags-by");
 
+  run.web().signal(SIGINT);
+  EXPECT_EQ(run.web().wait(10s).exit_code, 0);
+}
+
+// A recording with hand_node's Decisions that disagree with the paper's rule, played up to frame
+// 55 (and its Decision): the page shows hand_node's flags and slipping element, named by its
+// detector, where the paper's rule would show no slip at all (nothing moves in frame 55).
+TEST(Web, ChromiumShowsHandNodesDecisionsNotThePapersRule) {
+  ReplayedIntoWeb run({"--rate", "0"}, {"--to", "0.5505"}, true);
+  ASSERT_TRUE(run.started()) << run.error();
+  const auto played = run.replay().wait(20s);
+  ASSERT_EQ(played.exit_code, 0) << played.err;
+  // Frames 0-55 of both fingertips, their 56 Decisions and 3 events taken in.
+  ASSERT_TRUE(await_match([&] { return latest_update(run.port()); }, "\"messages\":(171),", 10s));
+  const auto shown = page_dom("http://127.0.0.1:" + std::to_string(run.port()) + "/?freeze=55");
+  ASSERT_FALSE(shown.timed_out) << shown.err;
+  ASSERT_EQ(shown.exit_code, 0) << shown.err;
+  const std::string& dom = shown.out;
+  EXPECT_EQ(attribute(dom, "fingertip-left", "data-sequence"), "55") << dom;
+  EXPECT_EQ(text(dom, "flags-by"), "flags: hand_node (learned)");
+  EXPECT_EQ(attribute(dom, "fingertip-left", "data-decided"), "1");
+  EXPECT_EQ(attribute(dom, "flag-left-SLIP", "data-on"), "1");
+  EXPECT_EQ(attribute(dom, "flag-right-SLIP", "data-on"), "0");
+  EXPECT_EQ(attribute(dom, "element-left-7", "data-slip"), "1");
+  EXPECT_EQ(attribute(dom, "element-left-4", "data-slip"), "0");
+  // The paper's rule on frame 55 of the recording: no element moves beyond dr.
+  const auto log = tools_test::read_log(run.log_path());
+  EXPECT_FALSE(expected_from(log, "left", 55).slip);
   run.web().signal(SIGINT);
   EXPECT_EQ(run.web().wait(10s).exit_code, 0);
 }
