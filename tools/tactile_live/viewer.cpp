@@ -20,7 +20,7 @@ void add_viewer_options(CLI::App& app, ViewerOptions& o, const std::string& f2_h
                  "calibration files: draw the elements where their disks are (default: rings of "
                  "1, 8, 16, 16); the list ends at the first endpoint (TRANSPORT://...)")
       ->type_name("FILE");
-  app.add_option("--f1", o.f1_n, "F1 [N] for TOUCH")->capture_default_str();
+  app.add_option("--f1", o.f1_n, "F1 [N] for TOUCH with --recompute")->capture_default_str();
   app.add_option("--f2", o.f2_n, f2_help)->capture_default_str();
   app.add_option("--dr", o.dr_mm, "dr [mm] for SLIP with --recompute")->capture_default_str();
   add_recompute_option(app, o.recompute, "no arm motion known");

@@ -166,13 +166,20 @@ int main(int argc, char** argv) {
       ->allow_extra_args(false);
   app.add_option("--element", opt.element,
                  "Fig. 10: this element's dy instead of the element moving most");
-  app.add_option(
-         "--calibration", opt.calibrations,
-         "calibration files: element positions for the maps (default: mean centroids in the log)")
-      ->allow_extra_args(false);
-  app.add_option("--f1", opt.f1, "F1 [N] for TOUCH with --recompute")->capture_default_str();
-  app.add_option("--f2", opt.f2, "F2 [N] for OVER with --recompute")->capture_default_str();
-  app.add_option("--dr", opt.dr, "dr [mm] for SLIP with --recompute")->capture_default_str();
+  // One file per --calibration, as --help shows it; files given as a list after one flag are
+  // taken too (CLI11 keeps the last argument for the log).
+  app.add_option("--calibration", opt.calibrations,
+                 "calibration file: element positions for the maps (default: mean centroids in "
+                 "the log); repeatable")
+      ->type_name("FILE")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  app.add_option("--f1", opt.f1, "F1 [N]: drawn as a line; TOUCH with --recompute")
+      ->capture_default_str();
+  app.add_option("--f2", opt.f2, "F2 [N]: drawn as a line; OVER with --recompute")
+      ->capture_default_str();
+  app.add_option("--dr", opt.dr, "dr [mm]: drawn as a band; SLIP with --recompute")
+      ->capture_default_str();
   tactile::live::add_recompute_option(app, opt.recompute, "no arm motion used; titles say so");
   app.add_option("--width", opt.width, "picture width in pixels")->capture_default_str();
   app.add_option("--height", opt.height, "picture height in pixels")->capture_default_str();

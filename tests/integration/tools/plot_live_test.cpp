@@ -89,6 +89,26 @@ TEST(Plot, SaysWhoDecidedTheFlags) {
   EXPECT_NE(r.err.find("must be paper, field or learned"), std::string::npos) << r.err;
 }
 
+// --calibration as --help shows it, once per file, and as a list after one flag: both read both
+// files (here missing: the first is named) and keep the last argument for the log.
+TEST(Plot, CalibrationFilesOncePerFlagOrAsAList) {
+  TempDir dir;
+  write_test_log(dir / "run.tlog", false);
+  const std::string a = (dir / "a.yaml").string();
+  const std::string b = (dir / "b.yaml").string();
+  for (const auto& argv :
+       {std::vector<std::string>{TACTILE_PLOT_PATH, "--calibration", a, "--calibration", b,
+                                 (dir / "run.tlog").string()},
+        std::vector<std::string>{TACTILE_PLOT_PATH, "--calibration", a, b,
+                                 (dir / "run.tlog").string()}}) {
+    const auto r = testing::run(argv);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find(a), std::string::npos) << r.err;
+  }
+  const auto help = testing::run({TACTILE_PLOT_PATH, "--help"});
+  EXPECT_NE(help.out.find("--calibration FILE "), std::string::npos) << help.out;
+}
+
 TEST(Plot, AtPastTheEndIsAnErrorNamingTheRecordingsTimeRange) {
   TempDir dir;
   write_test_log(dir / "run.tlog", true);
