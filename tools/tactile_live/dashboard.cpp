@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <ctime>
+#include <iterator>
 #include <numbers>
 #include <optional>
 #include <string_view>
@@ -13,6 +14,7 @@
 #include "tactile/control/types.hpp"
 #include "tactile/wire/arm.hpp"
 #include "tactile/wire/envelope.hpp"
+#include "tactile/wire/tactile_frame.hpp"
 
 namespace tactile::live {
 namespace {
@@ -84,11 +86,15 @@ std::vector<std::string> fingertip_block(const FingertipView& f, const Calibrati
   if (f.status != "COMPLETE" && f.status != "-") l.text(" " + std::string(f.status), "33");
   if (f.age_s > 1.0) l.text(fmt::format(" stale {:.0f}s", f.age_s), "33");
   lines.push_back(l.take());
-  l.text(f.touch ? "TOUCH" : "-----", f.touch ? "32" : "2");
-  l.text(" ");
-  l.text(f.slip ? "SLIP" : "----", f.slip ? "41;97" : "2");
-  l.text(" ");
-  l.text(f.over ? "OVER" : "----", f.over ? "41;97" : "2");
+  if (f.decided) {
+    l.text(f.touch ? "TOUCH" : "-----", f.touch ? "32" : "2");
+    l.text(" ");
+    l.text(f.slip ? "SLIP" : "----", f.slip ? "41;97" : "2");
+    l.text(" ");
+    l.text(f.over ? "OVER" : "----", f.over ? "41;97" : "2");
+  } else {
+    l.text("no decision", "2");
+  }
   l.text(fmt::format(" Fz {:.2f}N d {:.4f}mm", f.max_fz_n, f.max_slip_mm));
   lines.push_back(l.take());
   if (f.has_stats) {
@@ -250,6 +256,10 @@ std::string render(const LiveState& s, std::span<const Calibration> cals, const 
   l.text(fmt::format("phase {}", s.phase), "1");
   if (s.cycle > 0) l.text(fmt::format("  twist cycle {}", s.cycle));
   lines.push_back(l.take());
+  std::string label;
+  append_flags_label(s, label);
+  l.text(label, s.flags_from == FlagSource::kNone ? "33" : nullptr);
+  lines.push_back(l.take());
 
   const ScreenLayout layout =
       screen_layout(s.fingertips, width, height, static_cast<int>(lines.size()));
@@ -328,6 +338,34 @@ std::string render(const LiveState& s, std::span<const Calibration> cals, const 
   return out;
 }
 
+const char* to_string(FlagSource source) {
+  switch (source) {
+    case FlagSource::kHandNode:
+      return "hand_node";
+    case FlagSource::kRecomputed:
+      return "recomputed";
+    case FlagSource::kNone:
+      break;
+  }
+  return "none";
+}
+
+void append_flags_label(const LiveState& s, std::string& out) {
+  const std::string_view detector =
+      s.detector.empty() ? std::string_view("detector not named") : std::string_view(s.detector);
+  switch (s.flags_from) {
+    case FlagSource::kHandNode:
+      fmt::format_to(std::back_inserter(out), "flags: hand_node ({})", detector);
+      return;
+    case FlagSource::kRecomputed:
+      fmt::format_to(std::back_inserter(out), "flags: recomputed ({})", detector);
+      return;
+    case FlagSource::kNone:
+      break;
+  }
+  out += "flags: no decisions from hand_node (--recompute paper|field|learned decides here)";
+}
+
 std::string summary_lines(const LiveState& s) {
   std::string out;
   for (const auto& f : s.fingertips) {
@@ -339,11 +377,17 @@ std::string summary_lines(const LiveState& s) {
          {std::pair{f.touch, "TOUCH"}, std::pair{f.slip, "SLIP"}, std::pair{f.over, "OVER"}}) {
       if (on) flags += flags.empty() ? name : std::string(",") + name;
     }
+    std::string slipping;
+    for (const auto& e : f.elements) {
+      if (e.slip) slipping += fmt::format("{}{}", slipping.empty() ? "" : ",", e.id);
+    }
     out += fmt::format(
         "{} {} seq={} fps={:.1f} lost={} status={} contact={}/{} max_fz={:.3f}N "
-        "max_d={:.4f}mm flags={} phase={}\n",
+        "max_d={:.4f}mm flags={} slipping={} by={} detector={} phase={}\n",
         clock_text(s.now_ns, false), f.id, f.sequence, f.fps, f.lost, f.status, contact,
-        f.elements.size(), f.max_fz_n, f.max_slip_mm, flags.empty() ? "-" : flags, s.phase);
+        f.elements.size(), f.max_fz_n, f.max_slip_mm,
+        !f.decided ? "none" : (flags.empty() ? "-" : flags), slipping.empty() ? "-" : slipping,
+        to_string(s.flags_from), s.detector.empty() ? "-" : s.detector, s.phase);
   }
   return out;
 }
@@ -351,6 +395,84 @@ std::string summary_lines(const LiveState& s) {
 LiveModel::LiveModel(ModelOptions options, std::vector<std::string> endpoints)
     : options_(options), flags_(options_.control) {
   state_.endpoints = std::move(endpoints);
+  if (options_.recompute) {
+    state_.flags_from = FlagSource::kRecomputed;
+    state_.detector = control::to_string(*options_.recompute);
+  }
+}
+
+void LiveModel::on_frame(const v1::TactileFrame& fr, std::int64_t now) {
+  std::size_t k = 0;
+  FingertipView& f = fingertip(fr.sensor_id(), k);
+  if (last_sequence_[k] && fr.sequence() > *last_sequence_[k] + 1)
+    f.lost += fr.sequence() - *last_sequence_[k] - 1;
+  last_sequence_[k] = fr.sequence();
+  f.sequence = fr.sequence();
+  // The enum's name is static: a view of it costs no allocation per frame.
+  std::string_view status = v1::FrameStatus_Name(fr.status());
+  if (status.starts_with("FRAME_STATUS_")) status.remove_prefix(13);
+  f.status = status;
+  last_frame_ns_[k] = now;
+  if (fr.status() != v1::FRAME_STATUS_COMPLETE) return;
+  if (wire::read_elements(fr, readings_) != wire::DecodeStatus::kOk) {
+    ++state_.undecodable;
+    return;
+  }
+  ++frame_counters_[k].count;
+  f.elements.resize(readings_.size());
+  for (std::size_t i = 0; i < readings_.size(); ++i) {
+    const ElementReading& r = readings_[i];
+    f.elements[i] = {r.id, r.contact, false, r.fz, r.fx, r.fy};
+  }
+  control::FingertipInput in;
+  in.elements = readings_;
+  in.fresh = true;
+  // The frame's measurements (largest F_z and displacement in contact), whoever decides.
+  const control::FingertipFlags measured = flags_.analyze(in, twist_phase_);
+  f.max_fz_n = measured.max_fz_n;
+  f.max_slip_mm = measured.max_slip_mm;
+  if (options_.recompute) {
+    const control::FingertipSlip& slip =
+        detectors_[k].update(0, in, flags_.dr(twist_phase_), control::ArmMotion{});
+    const control::FingertipFlags fl = flags_.analyze(in, slip);
+    f.decided = true;
+    f.touch = fl.touch;
+    f.slip = fl.slip;
+    f.over = fl.over;
+    Slipping& s = slipping_[k];
+    s.count = std::min<std::size_t>(fl.slipping_elements, s.ids.size());
+    std::copy_n(fl.slipping_ids.begin(), s.count, s.ids.begin());
+  }
+  mark_slipping(k);
+}
+
+void LiveModel::on_decision(const v1::Decision& d) {
+  if (options_.recompute) return;  // asked to decide here: hand_node's decisions are not shown
+  state_.flags_from = FlagSource::kHandNode;
+  if (state_.detector != d.slip_detector()) state_.detector = d.slip_detector();
+  for (const v1::FingertipDecision& t : d.fingertips()) {
+    std::size_t k = 0;
+    FingertipView& f = fingertip(t.sensor_id(), k);
+    f.decided = true;
+    f.touch = t.touch();
+    f.slip = t.slip();
+    f.over = t.over();
+    Slipping& s = slipping_[k];
+    s.count = std::min<std::size_t>(static_cast<std::size_t>(t.slipping_element_ids_size()),
+                                    s.ids.size());
+    std::copy_n(t.slipping_element_ids().begin(), s.count, s.ids.begin());
+    mark_slipping(k);
+  }
+}
+
+void LiveModel::mark_slipping(std::size_t k) {
+  const Slipping& s = slipping_[k];
+  const auto named = [&](std::uint32_t id) {
+    return std::find(s.ids.begin(), s.ids.begin() + static_cast<std::ptrdiff_t>(s.count), id) !=
+           s.ids.begin() + static_cast<std::ptrdiff_t>(s.count);
+  };
+  for (ElementCell& e : state_.fingertips[k].elements)
+    e.slip = named(e.id);
 }
 
 FingertipView& LiveModel::fingertip(const std::string& id, std::size_t& index) {
@@ -363,6 +485,8 @@ FingertipView& LiveModel::fingertip(const std::string& id, std::size_t& index) {
   frame_counters_.push_back(Counter{id});
   last_frame_ns_.push_back(0);
   last_sequence_.emplace_back();
+  slipping_.emplace_back();
+  if (options_.recompute) detectors_.emplace_back(*options_.recompute, options_.control);
   index = state_.fingertips.size() - 1;
   return state_.fingertips.back();
 }
@@ -391,54 +515,12 @@ int LiveModel::add(std::string_view topic, std::span<const std::uint8_t> payload
   const v1::Envelope& envelope = decoder_.envelope();
   std::size_t k = 0;
   switch (envelope.body_case()) {
-    case v1::Envelope::kTactileFrame: {
-      const v1::TactileFrame& fr = envelope.tactile_frame();
-      FingertipView& f = fingertip(fr.sensor_id(), k);
-      if (last_sequence_[k] && fr.sequence() > *last_sequence_[k] + 1)
-        f.lost += fr.sequence() - *last_sequence_[k] - 1;
-      last_sequence_[k] = fr.sequence();
-      f.sequence = fr.sequence();
-      // The enum's name is static: a view of it costs no allocation per frame.
-      std::string_view status = v1::FrameStatus_Name(fr.status());
-      if (status.starts_with("FRAME_STATUS_")) status.remove_prefix(13);
-      f.status = status;
-      last_frame_ns_[k] = now;
-      if (fr.status() != v1::FRAME_STATUS_COMPLETE) break;
-      ++frame_counters_[k].count;
-      const auto n = static_cast<std::size_t>(fr.elements_size());
-      f.elements.resize(n);
-      readings_.resize(n);
-      for (std::size_t i = 0; i < n; ++i) {
-        const v1::ElementReading& e = fr.elements(static_cast<int>(i));
-        ElementReading& r = readings_[i];
-        r = {};
-        r.id = e.id();
-        r.contact = e.contact();
-        r.has_displacement = e.has_displacement();
-        r.dx_mm = e.dx_mm();
-        r.dy_mm = e.dy_mm();
-        r.fx = e.fx_n();
-        r.fy = e.fy_n();
-        r.fz = e.fz_n();
-      }
-      control::FingertipInput in;
-      in.elements = readings_;
-      in.fresh = true;
-      const control::FingertipFlags fl = flags_.analyze(in, twist_phase_);
-      const double dr = flags_.dr(twist_phase_);
-      for (std::size_t i = 0; i < n; ++i) {
-        const ElementReading& r = readings_[i];
-        f.elements[i] = {
-            r.id, r.contact, r.contact && r.has_displacement && std::hypot(r.dx_mm, r.dy_mm) > dr,
-            r.fz, r.fx,      r.fy};
-      }
-      f.touch = fl.touch;
-      f.slip = fl.slip;
-      f.over = fl.over;
-      f.max_fz_n = fl.max_fz_n;
-      f.max_slip_mm = fl.max_slip_mm;
+    case v1::Envelope::kTactileFrame:
+      on_frame(envelope.tactile_frame(), now);
       break;
-    }
+    case v1::Envelope::kDecision:
+      on_decision(envelope.decision());
+      break;
     case v1::Envelope::kSensorStats: {
       const v1::SensorStats& st = envelope.sensor_stats();
       FingertipView& f = fingertip(st.sensor_id(), k);

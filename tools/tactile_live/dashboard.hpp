@@ -15,6 +15,7 @@
 #include "tactile/calibration.hpp"
 #include "tactile/control/config.hpp"
 #include "tactile/control/flag_analyzer.hpp"
+#include "tactile/control/slip_detector.hpp"
 #include "tactile/reading.hpp"
 #include "tactile/v1/tactile.pb.h"
 #include "tactile/wire/envelope.hpp"
@@ -24,7 +25,7 @@ namespace tactile::live {
 struct ElementCell {
   std::uint32_t id = 0;
   bool contact = false;
-  bool slip = false;  // in contact and moving more than dr this frame
+  bool slip = false;  // marked slipping by the decision shown (LiveState::flags_from)
   double fz_n = 0;
   double fx_n = 0;  // shear force F_x, F_y
   double fy_n = 0;
@@ -37,7 +38,10 @@ struct FingertipView {
   std::string_view status = "-";  // FrameStatus of the latest frame, without its prefix
   double fps = 0;                 // whole frames per second over the last second
   std::uint64_t lost = 0;         // gaps in the TactileFrame sequence
+  // The flags of the decision shown (LiveState::flags_from); `decided` false: none yet.
+  bool decided = false;
   bool touch = false, slip = false, over = false;
+  // Measured on the latest whole frame: the largest F_z and displacement in contact.
   double max_fz_n = 0;
   double max_slip_mm = 0;
   double age_s = 0;  // since the latest frame
@@ -54,6 +58,13 @@ struct EventLine {
   std::string detail;
 };
 
+// Where the flags and slipping elements shown come from (docs/architecture.md, rule 15):
+// hand_node's Decisions (topic `decision`), the model's own detector when asked (--recompute), or
+// nowhere yet.
+enum class FlagSource : std::uint8_t { kNone, kHandNode, kRecomputed };
+// "hand_node", "recomputed" or "none": the JSON's and line mode's name.
+const char* to_string(FlagSource source);
+
 struct TopicRate {
   std::string topic;
   double per_s = 0;
@@ -65,6 +76,10 @@ struct LiveState {
   std::vector<FingertipView> fingertips;
   std::string phase = "-";
   std::uint32_t cycle = 0;
+  FlagSource flags_from = FlagSource::kNone;
+  // The detector that decided: hand_node's Decision.slip_detector ("" from an older hand_node),
+  // or the one recomputing.
+  std::string detector;
   std::deque<EventLine> events;    // newest last
   std::uint64_t events_total = 0;  // every event so far: the newest is number events_total - 1
   std::vector<TopicRate> rates;
@@ -103,13 +118,21 @@ struct RenderOptions {
 std::string render(const LiveState& state, std::span<const Calibration> calibrations,
                    const RenderOptions& options);
 
+// Who decided the flags shown, for the screen, appended to `out`: "flags: hand_node (learned)",
+// "flags: recomputed (paper)", or that no hand_node decision has arrived. Allocates nothing once
+// `out` has room.
+void append_flags_label(const LiveState& state, std::string& out);
+
 // Line mode: one line per fingertip (for a pipe or a log file).
 std::string summary_lines(const LiveState& state);
 std::string event_line(const EventLine& e);
 
 struct ModelOptions {
-  control::Config control;  // F1, F2, dr for the flags
+  control::Config control;  // F1, F2, dr (and the detector's parameters) for --recompute
   std::size_t max_events = 8;
+  // Decide the flags here with this detector (common/control's SlipDetector and FlagAnalyzer)
+  // instead of showing hand_node's Decisions; no arm motion is known here.
+  std::optional<control::SlipDetectorKind> recompute;
 };
 
 class LiveModel {
@@ -126,9 +149,21 @@ class LiveModel {
  private:
   FingertipView& fingertip(const std::string& id, std::size_t& index);
   void count(std::string_view topic, std::int64_t now);
+  void on_frame(const v1::TactileFrame& frame, std::int64_t now);
+  void on_decision(const v1::Decision& decision);
+  // Marks fingertip k's elements slipping that its latest decision names.
+  void mark_slipping(std::size_t k);
 
   ModelOptions options_;
   control::FlagAnalyzer flags_;
+  // --recompute: one detector per fingertip shown, each deciding its fingertip in slot 0.
+  std::vector<control::SlipDetector> detectors_;
+  // Per fingertip: the ids its latest decision marked slipping.
+  struct Slipping {
+    std::array<std::uint32_t, control::kMaxSlipElements> ids{};
+    std::size_t count = 0;
+  };
+  std::vector<Slipping> slipping_;
   LiveState state_;
   wire::EnvelopeDecoder decoder_;
   std::vector<ElementReading> readings_;

@@ -73,7 +73,8 @@ int run(const Options& opt) {
   const bool screen = opt.screen || (tty && !opt.plain);
   const bool color = screen && !opt.no_color && std::getenv("NO_COLOR") == nullptr;
 
-  tactile::live::LiveModel model({tactile::live::flag_thresholds(opt.viewer), 8},
+  tactile::live::LiveModel model({tactile::live::flag_thresholds(opt.viewer), 8,
+                                  tactile::live::recompute_detector(opt.viewer.recompute)},
                                  tactile::live::endpoints_of(sources));
   tactile::live::RenderOptions ro;
   ro.color = color;
@@ -175,7 +176,7 @@ int main(int argc, char** argv) {
   app.add_flag("--no-color", opt.no_color, "no colours (also when NO_COLOR is set)");
   tactile::cli::add_log_level(app, opt.log_level);
   return tactile::cli::run(app, argc, argv, [&] {
-    tactile::live::require_endpoints(opt.viewer);
+    tactile::live::settle_endpoints(opt.viewer);
     return run(opt);
   });
 }

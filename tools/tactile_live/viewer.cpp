@@ -1,5 +1,7 @@
 #include "viewer.hpp"
 
+#include <algorithm>
+
 #include "tactile/cli/run.hpp"
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/util/log.hpp"
@@ -16,16 +18,45 @@ void add_viewer_options(CLI::App& app, ViewerOptions& o, const std::string& f2_h
   app.add_option("--client-key", o.client_key, "this program's CURVE key pair (.key)");
   app.add_option("--calibration", o.calibrations,
                  "calibration files: draw the elements where their disks are (default: rings of "
-                 "1, 8, 16, 16)")
-      ->allow_extra_args(false);
-  app.add_option("--f1", o.f1_n, "F1 [N] for TOUCH")->capture_default_str();
+                 "1, 8, 16, 16); the list ends at the first endpoint (TRANSPORT://...)")
+      ->type_name("FILE");
+  app.add_option("--f1", o.f1_n, "F1 [N] for TOUCH with --recompute")->capture_default_str();
   app.add_option("--f2", o.f2_n, f2_help)->capture_default_str();
-  app.add_option("--dr", o.dr_mm, "dr [mm] for SLIP")->capture_default_str();
+  app.add_option("--dr", o.dr_mm, "dr [mm] for SLIP with --recompute")->capture_default_str();
+  add_recompute_option(app, o.recompute, "no arm motion known");
 }
 
-void require_endpoints(const ViewerOptions& o) {
+bool looks_like_endpoint(std::string_view text) {
+  return text.find("://") != std::string_view::npos;
+}
+
+void settle_endpoints(ViewerOptions& o) {
+  const auto first = std::find_if(o.calibrations.begin(), o.calibrations.end(),
+                                  [](const std::string& c) { return looks_like_endpoint(c); });
+  o.endpoints.insert(o.endpoints.begin(), first, o.calibrations.end());
+  o.calibrations.erase(first, o.calibrations.end());
   if (o.endpoints.empty() && o.curve.empty())
     throw cli::UsageError("give at least one endpoint to subscribe to");
+}
+
+CLI::Option* add_recompute_option(CLI::App& app, std::string& detector, const std::string& note) {
+  return app
+      .add_option("--recompute", detector,
+                  "decide TOUCH, SLIP and OVER here with this slip detector (paper, field or "
+                  "learned; " +
+                      note +
+                      ") instead of showing hand_node's decisions (topic decision), and say so")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            if (control::slip_detector_from_string(text)) return {};
+            return "must be " + std::string(control::kSlipDetectorNames);
+          },
+          "DETECTOR", "slip detector"));
+}
+
+std::optional<control::SlipDetectorKind> recompute_detector(const std::string& detector) {
+  if (detector.empty()) return std::nullopt;
+  return control::slip_detector_from_string(detector);
 }
 
 std::vector<Calibration> load_calibrations(const ViewerOptions& o) {
@@ -52,7 +83,8 @@ recording::SourceOptions viewer_sources(const ViewerOptions& o) {
   for (const auto& c : o.curve)
     so.curve.push_back(recording::parse_curve_source(c));
   so.client_key = o.client_key;
-  so.topics = {wire::kFrameTopicPrefix, wire::kStatsTopicPrefix, wire::kEventTopic};
+  so.topics = {wire::kFrameTopicPrefix, wire::kStatsTopicPrefix, wire::kEventTopic,
+               wire::kDecisionTopic};
   so.max_message_bytes = std::int64_t{4} << 20;
   so.receive_hwm = 10000;
   return so;

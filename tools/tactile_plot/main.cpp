@@ -16,6 +16,7 @@
 #include "tactile/util/clock.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
+#include "viewer.hpp"
 
 namespace {
 
@@ -32,6 +33,7 @@ struct Options {
   double f1 = tactile::control::Config{}.f1_n;
   double f2 = tactile::control::Config{}.f2_n;
   double dr = tactile::control::Config{}.dr_mm;
+  std::string recompute;
   int width = 1000;
   int height = 700;
   std::string log_level = "info";
@@ -64,6 +66,7 @@ int run(const Options& opt) {
   po.control.f1_n = opt.f1;
   po.control.f2_n = opt.f2;
   po.control.dr_mm = opt.dr;
+  po.recompute = tactile::live::recompute_detector(opt.recompute);
   po.width = opt.width;
   po.height = opt.height;
   std::vector<std::string> warnings;
@@ -125,6 +128,7 @@ int run(const Options& opt) {
     written.insert(written.end(), files.begin(), files.end());
   };
   if (figures.count("shear") != 0) add(tactile::plots::draw_shear_fields(data, opt.out));
+  std::printf("%s\n", data.flag_source_text().c_str());
   if (figures.count("fig10") != 0) {
     add(tactile::plots::draw_fig10(data, opt.out));
     std::printf("Fig. 10 fingertip x: %s\n", data.position_source_text().c_str());
@@ -162,13 +166,21 @@ int main(int argc, char** argv) {
       ->allow_extra_args(false);
   app.add_option("--element", opt.element,
                  "Fig. 10: this element's dy instead of the element moving most");
-  app.add_option(
-         "--calibration", opt.calibrations,
-         "calibration files: element positions for the maps (default: mean centroids in the log)")
-      ->allow_extra_args(false);
-  app.add_option("--f1", opt.f1, "F1 [N] for the TOUCH flag")->capture_default_str();
-  app.add_option("--f2", opt.f2, "F2 [N] for the OVER flag")->capture_default_str();
-  app.add_option("--dr", opt.dr, "dr [mm] for the SLIP flag")->capture_default_str();
+  // One file per --calibration, as --help shows it; files given as a list after one flag are
+  // taken too (CLI11 keeps the last argument for the log).
+  app.add_option("--calibration", opt.calibrations,
+                 "calibration file: element positions for the maps (default: mean centroids in "
+                 "the log); repeatable")
+      ->type_name("FILE")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  app.add_option("--f1", opt.f1, "F1 [N]: drawn as a line; TOUCH with --recompute")
+      ->capture_default_str();
+  app.add_option("--f2", opt.f2, "F2 [N]: drawn as a line; OVER with --recompute")
+      ->capture_default_str();
+  app.add_option("--dr", opt.dr, "dr [mm]: drawn as a band; SLIP with --recompute")
+      ->capture_default_str();
+  tactile::live::add_recompute_option(app, opt.recompute, "no arm motion used; titles say so");
   app.add_option("--width", opt.width, "picture width in pixels")->capture_default_str();
   app.add_option("--height", opt.height,
                  "picture height in pixels (shear fields: as tall as their panels need)")

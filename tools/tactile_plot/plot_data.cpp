@@ -11,6 +11,7 @@
 #include "tactile/plot/task_figures.hpp"
 #include "tactile/wire/arm.hpp"
 #include "tactile/wire/envelope.hpp"
+#include "tactile/wire/tactile_frame.hpp"
 
 namespace tactile::plots {
 namespace {
@@ -52,6 +53,7 @@ SensorData* PlotData::sensor(const std::string& id) {
       std::find(options_.sensors.begin(), options_.sensors.end(), id) == options_.sensors.end()) {
     return nullptr;
   }
+  if (options_.recompute) detectors_.emplace_back(*options_.recompute, options_.control);
   SensorData s;
   s.id = id;
   if (options_.at_s.empty()) {
@@ -66,6 +68,48 @@ SensorData* PlotData::sensor(const std::string& id) {
   }
   sensors_.push_back(std::move(s));
   return &sensors_.back();
+}
+
+FlagSource PlotData::flag_source() const {
+  if (options_.recompute) return FlagSource::kRecomputed;
+  return decisions_ ? FlagSource::kHandNode : FlagSource::kNone;
+}
+
+std::string PlotData::flag_source_text() const {
+  switch (flag_source()) {
+    case FlagSource::kHandNode:
+      return fmt::format("flags: hand_node ({})",
+                         detector_.empty() ? "detector not named" : detector_);
+    case FlagSource::kRecomputed:
+      return fmt::format("flags: recomputed ({})", control::to_string(*options_.recompute));
+    case FlagSource::kNone:
+      break;
+  }
+  return "no hand_node decisions in the log: no flags (--recompute paper|field|learned)";
+}
+
+// hand_node's decision on the frames it answered: each answered frame's sample takes its
+// fingertip's flags (frames are recorded before the decisions that answer them).
+void PlotData::on_decision(const v1::Decision& d) {
+  decisions_ = true;
+  detector_ = d.slip_detector();
+  if (options_.recompute) return;
+  for (const v1::FrameRef& ref : d.answers()) {
+    SensorData* s = sensor(ref.sensor_id());
+    if (s == nullptr) continue;
+    const auto tip = std::find_if(
+        d.fingertips().begin(), d.fingertips().end(),
+        [&](const v1::FingertipDecision& t) { return t.sensor_id() == ref.sensor_id(); });
+    if (tip == d.fingertips().end()) continue;
+    for (auto it = s->frames.rbegin(); it != s->frames.rend(); ++it) {
+      if (it->sequence != ref.sequence()) continue;
+      it->decided = true;
+      it->touch = tip->touch();
+      it->slip = tip->slip();
+      it->over = tip->over();
+      break;
+    }
+  }
 }
 
 std::string PlotData::position_source_text() const {
@@ -90,6 +134,9 @@ void PlotData::add(const v1::LogRecord& record) {
   switch (envelope_.body_case()) {
     case v1::Envelope::kTactileFrame:
       on_frame(envelope_.tactile_frame(), t, record.receive_time_ns());
+      break;
+    case v1::Envelope::kDecision:
+      on_decision(envelope_.decision());
       break;
     case v1::Envelope::kEvent: {
       const v1::Event& e = envelope_.event();
@@ -127,6 +174,12 @@ void PlotData::on_frame(const v1::TactileFrame& f, double t, std::int64_t receiv
   if (s == nullptr) return;
   FrameSample x;
   x.t_s = t;
+  x.sequence = f.sequence();
+  // Until a Decision answers this frame: the fingertip's latest TOUCH and OVER held.
+  if (!s->frames.empty()) {
+    x.touch = s->frames.back().touch;
+    x.over = s->frames.back().over;
+  }
   if (f.publish_timestamp_ns() > 0) {
     const double cam =
         static_cast<double>(f.publish_timestamp_ns() - f.camera_timestamp_ns()) * 1e-6;
@@ -143,20 +196,14 @@ void PlotData::on_frame(const v1::TactileFrame& f, double t, std::int64_t receiv
     s->frames.push_back(x);
     return;
   }
-  readings_.resize(static_cast<std::size_t>(f.elements_size()));
+  if (wire::read_elements(f, readings_) != wire::DecodeStatus::kOk) {
+    ++s->incomplete;  // not usable whole: counted with the incomplete frames
+    s->frames.push_back(x);
+    return;
+  }
   double dy_of_max = 0;
   double best = -1;
-  for (int i = 0; i < f.elements_size(); ++i) {
-    const v1::ElementReading& e = f.elements(i);
-    ElementReading& r = readings_[static_cast<std::size_t>(i)];
-    r = {};
-    r.id = e.id();
-    r.contact = e.contact();
-    r.has_displacement = e.has_displacement();
-    r.G = e.g();
-    r.dx_mm = e.dx_mm();
-    r.dy_mm = e.dy_mm();
-    r.fz = e.fz_n();
+  for (const v1::ElementReading& e : f.elements()) {
     if (e.contact()) {
       s->centroid_sum[e.id()].first += e.x_mm();
       s->centroid_sum[e.id()].second += e.y_mm();
@@ -173,11 +220,17 @@ void PlotData::on_frame(const v1::TactileFrame& f, double t, std::int64_t receiv
   control::FingertipInput in;
   in.elements = readings_;
   in.fresh = true;
-  const control::FingertipFlags fl = flags_.analyze(in, twist_phase_);
-  x.touch = fl.touch;
-  x.slip = fl.slip;
-  x.over = fl.over;
-  x.max_slip_mm = fl.max_slip_mm;
+  // The frame's largest displacement in contact, whoever decides.
+  x.max_slip_mm = flags_.analyze(in, twist_phase_).max_slip_mm;
+  if (options_.recompute) {
+    control::SlipDetector& detector = detectors_[static_cast<std::size_t>(s - sensors_.data())];
+    const control::FingertipFlags fl =
+        flags_.analyze(in, detector.update(0, in, flags_.dr(twist_phase_), control::ArmMotion{}));
+    x.decided = true;
+    x.touch = fl.touch;
+    x.slip = fl.slip;
+    x.over = fl.over;
+  }
   x.dy_mm = dy_of_max;
   if (source_ == PositionSource::kArmState) {
     const auto it = arm_xy_mm_.find(f.sensor_id());
@@ -463,6 +516,7 @@ plot::TaskFigureInput task_input(const PlotData& d) {
       in.x_is_time = true;
       break;
   }
+  in.title = d.flag_source_text();
   for (const auto& s : d.sensors()) {
     if (d.position_source() != PositionSource::kNone && !s.transport_known)
       in.x_source += "; world x: no transport seen";

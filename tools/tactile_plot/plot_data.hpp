@@ -12,6 +12,7 @@
 #include "tactile/calibration.hpp"
 #include "tactile/control/config.hpp"
 #include "tactile/control/flag_analyzer.hpp"
+#include "tactile/control/slip_detector.hpp"
 #include "tactile/v1/log.pb.h"
 #include "tactile/v1/tactile.pb.h"
 
@@ -21,9 +22,14 @@ inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 struct FrameSample {
   double t_s = 0;  // from the log's first record
+  std::uint64_t sequence = 0;
   double max_fz_n = 0;
   double max_slip_mm = 0;  // largest per-frame displacement among in-contact elements
   double dy_mm = 0;        // signed dy of that element (or of --element)
+  // The flags decided on this frame (PlotData::flag_source): hand_node's Decision that answered
+  // it, or the recomputation. A frame no Decision answered holds the fingertip's latest TOUCH and
+  // OVER (SLIP is decided on fresh frames only) and has `decided` false.
+  bool decided = false;
   bool touch = false, slip = false, over = false;
   // Fig. 10's x: the position along the transport (finish() sets it from world_x/y_mm), NaN
   // when unknown.
@@ -77,7 +83,10 @@ struct PlotOptions {
   std::vector<double> at_s;              // snapshot times; empty: the frame of largest total shear
   std::vector<std::string> sensors;      // empty: every sensor
   std::optional<std::uint32_t> element;  // Fig. 10: this element's dy instead of the largest
-  control::Config control;               // F1, F2, dr for the flags
+  control::Config control;               // F1, F2, dr (and the detector's parameters)
+  // Decide the flags here with this detector (common/control) instead of drawing hand_node's
+  // Decisions from the log; no arm motion is used.
+  std::optional<control::SlipDetectorKind> recompute;
   std::vector<Calibration> calibrations;
   int width = 1000;
   int height = 700;
@@ -85,6 +94,9 @@ struct PlotOptions {
 
 // Where Fig. 10's fingertip x comes from.
 enum class PositionSource { kNone, kGroundTruth, kArmState };
+
+// Where the flags drawn come from (docs/architecture.md, rule 15).
+enum class FlagSource { kNone, kHandNode, kRecomputed };
 
 class PlotData {
  public:
@@ -96,6 +108,10 @@ class PlotData {
   const std::vector<EventMark>& events() const { return events_; }
   PositionSource position_source() const { return source_; }
   std::string position_source_text() const;
+  FlagSource flag_source() const;
+  // The flags' source for the figures' titles: "flags: hand_node (learned)", "flags: recomputed
+  // (paper)", or that the log holds no hand_node decisions.
+  std::string flag_source_text() const;
   const PlotOptions& options() const { return options_; }
   // The log's first and last frame time (s from its first record), for --at.
   std::optional<std::pair<double, double>> frame_time_range() const;
@@ -103,11 +119,16 @@ class PlotData {
  private:
   SensorData* sensor(const std::string& id);
   void on_frame(const v1::TactileFrame& f, double t, std::int64_t receive_ns);
+  void on_decision(const v1::Decision& d);
   void snapshot(SensorData& s, const v1::TactileFrame& f, double t);
 
   PlotOptions options_;
   control::FlagAnalyzer flags_;
   std::vector<SensorData> sensors_;
+  // --recompute: one detector per sensor (in sensors_' order), each deciding in its slot 0.
+  std::vector<control::SlipDetector> detectors_;
+  bool decisions_ = false;  // the log holds hand_node's Decisions
+  std::string detector_;    // the latest Decision's slip_detector
   std::vector<EventMark> events_;
   std::optional<std::int64_t> first_ns_;
   PositionSource source_ = PositionSource::kNone;

@@ -55,7 +55,9 @@ int run(const Options& opt) {
   tactile::recording::Sources sources(ctx, so);
 
   const tactile::control::Config cc = tactile::live::flag_thresholds(opt.viewer);
-  tactile::live::LiveModel model({cc, opt.events}, tactile::live::endpoints_of(sources));
+  tactile::live::LiveModel model(
+      {cc, opt.events, tactile::live::recompute_detector(opt.viewer.recompute)},
+      tactile::live::endpoints_of(sources));
   tactile::web::SnapshotWriter writer(std::move(cals), cc);
   tactile::web::UpdateSlot slot;
   tactile::web::WebServer server(web, slot);
@@ -77,6 +79,7 @@ int run(const Options& opt) {
   bool changed = true;
   tactile::web::UpdateCounters counters;
   std::string update;
+  std::string point;
   tactile::recording::Sources::Message m;
   while (!tactile::util::stop_requested()) {
     std::int64_t now = tactile::util::monotonic_ns();
@@ -88,7 +91,8 @@ int run(const Options& opt) {
       counters.coalesced = slot.coalesced();
       counters.streams = server.streams();
       writer.write(model.state(), counters, update);
-      slot.publish(update);
+      writer.write_point(model.state(), point);
+      slot.publish(update, point);
       changed = false;
       last_update = now;
       next_update += period;
@@ -156,7 +160,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   tactile::cli::add_log_level(app, opt.log_level);
   return tactile::cli::run(app, argc, argv, [&] {
-    tactile::live::require_endpoints(opt.viewer);
+    tactile::live::settle_endpoints(opt.viewer);
     return run(opt);
   });
 }

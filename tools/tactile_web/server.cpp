@@ -13,22 +13,38 @@
 
 namespace tactile::web {
 
-void UpdateSlot::publish(std::string& update) {
+UpdateSlot::UpdateSlot() {
+  for (auto& p : points_)
+    p.reserve(kPointRoom);
+}
+
+void UpdateSlot::publish(std::string& update, const std::string& point) {
   {
     std::lock_guard lock(mutex_);
     latest_.swap(update);
+    points_[version_ % kHistory] = point;  // into the slot's own capacity once warm
     ++version_;
   }
   changed_.notify_all();
 }
 
 UpdateSlot::Wait UpdateSlot::wait_newer(std::uint64_t& seen, std::string& out,
-                                        std::chrono::milliseconds timeout) {
+                                        std::chrono::milliseconds timeout, std::string* history) {
   std::unique_lock lock(mutex_);
   if (!changed_.wait_for(lock, timeout, [&] { return closed_ || version_ > seen; }))
     return Wait::kTimeout;
   if (closed_) return Wait::kClosed;
   if (seen > 0) coalesced_ += version_ - seen - 1;
+  if (seen == 0 && history != nullptr) {
+    // The points of the updates before the latest, oldest first (the latest comes in `out`).
+    history->assign("[");
+    const std::uint64_t kept = std::min<std::uint64_t>(version_ - 1, kHistory - 1);
+    for (std::uint64_t v = version_ - kept; v < version_; ++v) {
+      if (v > version_ - kept) *history += ',';
+      *history += points_[(v - 1) % kHistory];
+    }
+    *history += ']';
+  }
   seen = version_;
   if (out.capacity() < latest_.capacity()) out.reserve(latest_.capacity());
   out = latest_;
@@ -111,6 +127,7 @@ WebServer::WebServer(const ServerOptions& o, UpdateSlot& slot)
     struct Stream {
       std::uint64_t seen = 0;
       std::string update;
+      std::string history;
       std::string message;
     };
     auto st = std::make_shared<Stream>();
@@ -118,7 +135,9 @@ WebServer::WebServer(const ServerOptions& o, UpdateSlot& slot)
     res.set_chunked_content_provider(
         "text/event-stream",
         [this, st](std::size_t, httplib::DataSink& sink) {
-          switch (slot_.wait_newer(st->seen, st->update, std::chrono::milliseconds(500))) {
+          const bool first = st->seen == 0;
+          switch (slot_.wait_newer(st->seen, st->update, std::chrono::milliseconds(500),
+                                   first ? &st->history : nullptr)) {
             case UpdateSlot::Wait::kClosed: {
               // Tells the page the program stopped, so that it stops reconnecting.
               static constexpr std::string_view kEnd = "event: end\ndata: {}\n\n";
@@ -131,7 +150,14 @@ WebServer::WebServer(const ServerOptions& o, UpdateSlot& slot)
             case UpdateSlot::Wait::kNew:
               break;
           }
-          st->message.assign("data: ");
+          // A page that joins late gets the charts' recent points before its first update.
+          st->message.clear();
+          if (first) {
+            st->message += "event: history\ndata: ";
+            st->message += st->history;
+            st->message += "\n\n";
+          }
+          st->message += "data: ";
           st->message += st->update;
           st->message += "\n\n";
           ++sent_;

@@ -4,6 +4,7 @@
 // The subscriber hands each update to an UpdateSlot and goes on; every viewer's connection takes
 // the newest update when it is ready for one, so a slow browser gets fewer updates (counted as
 // coalesced) and never holds up the subscriber.
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -22,14 +23,25 @@ namespace tactile::web {
 
 class UpdateSlot {
  public:
+  // Chart points kept for a page that joins late: the page's rolling charts hold as many.
+  static constexpr std::size_t kHistory = 300;
+  // Room for a chart point of a few fingertips in every slot of the history at once, so that
+  // publishing allocates nothing from the first update on (docs/architecture.md, rule 4).
+  static constexpr std::size_t kPointRoom = 512;
+  UpdateSlot();
+
   // Puts `update` in the slot and gives back the buffer it replaced (its capacity reused by the
-  // next update): no allocation once the buffers have grown to an update's size.
-  void publish(std::string& update);
+  // next update), and keeps `point` (SnapshotWriter::write_point) among the latest kHistory: no
+  // allocation once the buffers have grown to an update's size.
+  void publish(std::string& update, const std::string& point);
 
   enum class Wait { kNew, kTimeout, kClosed };
   // Waits up to `timeout` for an update newer than `seen`; copies it into `out` and moves
-  // `seen` to it. Updates skipped on the way are counted in coalesced().
-  Wait wait_newer(std::uint64_t& seen, std::string& out, std::chrono::milliseconds timeout);
+  // `seen` to it. Updates skipped on the way are counted in coalesced(). With `history`, a
+  // viewer's first update (`seen` 0) comes with the chart points of the updates before it, as one
+  // JSON array in *history, so that a page that joins late fills its charts at once.
+  Wait wait_newer(std::uint64_t& seen, std::string& out, std::chrono::milliseconds timeout,
+                  std::string* history = nullptr);
   // The latest update, or an empty string before the first one.
   std::string latest() const;
   void close();
@@ -39,6 +51,7 @@ class UpdateSlot {
   mutable std::mutex mutex_;
   std::condition_variable changed_;
   std::string latest_;
+  std::array<std::string, kHistory> points_;  // a ring: points_[(version_ - 1) % kHistory] newest
   std::uint64_t version_ = 0;
   bool closed_ = false;
   std::atomic<std::uint64_t> coalesced_{0};

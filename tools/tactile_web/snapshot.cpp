@@ -56,6 +56,14 @@ void SnapshotWriter::write(const live::LiveState& s, const UpdateCounters& c, st
   fmt::format_to(o, R"("undecodable":{},"f1_n":{},"f2_n":{},"dr_mm":{},"phase":)", s.undecodable,
                  control_.f1_n, control_.f2_n, control_.dr_mm);
   append_string(out, s.phase);
+  // Who decided the flags and slipping elements (docs/architecture.md, rule 15), and the line
+  // the page shows for it.
+  fmt::format_to(o, R"(,"flags_from":"{}","detector":)", live::to_string(s.flags_from));
+  append_string(out, s.detector);
+  label_.clear();
+  live::append_flags_label(s, label_);
+  out += R"(,"flags_label":)";
+  append_string(out, label_);
   fmt::format_to(o, R"(,"cycle":{},"fingertips":[)", s.cycle);
   for (std::size_t i = 0; i < s.fingertips.size(); ++i) {
     const live::FingertipView& f = s.fingertips[i];
@@ -64,8 +72,10 @@ void SnapshotWriter::write(const live::LiveState& s, const UpdateCounters& c, st
     append_string(out, f.id);
     fmt::format_to(o, R"(,"sequence":{},"status":)", f.sequence);
     append_string(out, f.status);
-    fmt::format_to(o, R"(,"fps":{:.1f},"lost":{},"age_s":{:.2f},"touch":{},"slip":{},"over":{},)",
-                   finite(f.fps), f.lost, finite(f.age_s), f.touch, f.slip, f.over);
+    fmt::format_to(o,
+                   R"(,"fps":{:.1f},"lost":{},"age_s":{:.2f},"decided":{},"touch":{},"slip":{},)"
+                   R"("over":{},)",
+                   finite(f.fps), f.lost, finite(f.age_s), f.decided, f.touch, f.slip, f.over);
     fmt::format_to(o, R"("max_fz_n":{},"max_slip_mm":{},"elements":[)", finite(f.max_fz_n),
                    finite(f.max_slip_mm));
     const auto& pos = layout(f);
@@ -89,6 +99,24 @@ void SnapshotWriter::write(const live::LiveState& s, const UpdateCounters& c, st
     out += R"(,"detail":)";
     append_string(out, e.detail);
     out += '}';
+  }
+  out += "]}";
+}
+
+void SnapshotWriter::write_point(const live::LiveState& s, std::string& out) const {
+  constexpr std::size_t kRoom = 512;
+  if (out.capacity() < kRoom) out.reserve(kRoom);
+  out.clear();
+  auto o = std::back_inserter(out);
+  fmt::format_to(o, R"({{"time_ns":{},"f2_n":{},"dr_mm":{},"fingertips":[)", s.now_ns,
+                 control_.f2_n, control_.dr_mm);
+  for (std::size_t i = 0; i < s.fingertips.size(); ++i) {
+    const live::FingertipView& f = s.fingertips[i];
+    if (i > 0) out += ',';
+    out += R"({"id":)";
+    append_string(out, f.id);
+    fmt::format_to(o, R"(,"max_fz_n":{},"max_slip_mm":{}}})", finite(f.max_fz_n),
+                   finite(f.max_slip_mm));
   }
   out += "]}";
 }

@@ -31,6 +31,10 @@ class SnapshotWriter {
   // positions are the calibration's disk centres, else the 41-element rings (live::dome_layout),
   // computed once per fingertip.
   void write(const live::LiveState& state, const UpdateCounters& counters, std::string& out);
+  // The update's point of the page's rolling charts (time_ns, f2_n, dr_mm and each fingertip's
+  // id, max_fz_n and max_slip_mm, named as in the update) as one JSON object in `out`: what
+  // tactile_web keeps of past updates for a page that joins late (UpdateSlot).
+  void write_point(const live::LiveState& state, std::string& out) const;
 
  private:
   const std::vector<std::array<double, 2>>& layout(const live::FingertipView& f);
@@ -43,6 +47,7 @@ class SnapshotWriter {
     std::vector<std::array<double, 2>> positions;
   };
   std::vector<Layout> layouts_;
+  std::string label_;  // the flags' label, escaped into the update
 };
 
 }  // namespace tactile::web

@@ -133,6 +133,7 @@ ControllerOutput GraspMoveTwistController::update(const ControllerInput& in) noe
   for (std::size_t f = 0; f < kFingertips; ++f)
     slips[f] = &detector_.update(f, in.fingertips[f], threshold, arm);
   out.flags = flags_.analyze(in.fingertips, mode_, slips);
+  out.slip_detector = detector_.kind();
   out.phase = phase_;
   out.twist_cycle = two_.cycle();
   if (done()) return out;
@@ -171,8 +172,10 @@ ControllerOutput GraspMoveTwistController::update(const ControllerInput& in) noe
     phase_ = current_phase();
     out.phase = phase_;
     out.flags.slip = false;
-    for (FingertipFlags& f : out.flags.fingertip)
+    for (FingertipFlags& f : out.flags.fingertip) {
       f.slip = false;
+      f.slipping_elements = 0;  // what the viewers draw agrees with the SLIP flag held off
+    }
     out.flags.search = out.flags.move = false;
     return out;
   }

@@ -37,6 +37,7 @@ FingertipFlags analyze_with(const FingertipInput& in, double f1_n, double f2_n,
     if (moved > f.max_slip_mm) f.max_slip_mm = moved;
     if (in.fresh && slips(i)) {
       f.slip = true;
+      if (f.slipping_elements < kMaxSlipElements) f.slipping_ids[f.slipping_elements] = r.id;
       ++f.slipping_elements;
       if (r.fz > best_slip_fz) {
         best_slip_fz = r.fz;

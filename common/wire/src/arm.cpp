@@ -278,6 +278,7 @@ void fill_decision(const control::ControllerOutput& output, std::int64_t time_ns
   }
   out.set_phase(control::to_string(output.phase));
   out.set_command_sequence(command_sequence);
+  out.set_slip_detector(control::to_string(output.slip_detector));
   auto& tips = *out.mutable_fingertips();
   resize(tips, ids.size());
   for (std::size_t i = 0; i < ids.size(); ++i) {
@@ -288,6 +289,11 @@ void fill_decision(const control::ControllerOutput& output, std::int64_t time_ns
     d.set_slip(f.slip);
     d.set_over(f.over);
     d.set_slipping_elements(f.slipping_elements);
+    auto& slipping = *d.mutable_slipping_element_ids();
+    slipping.Clear();  // keeps its capacity: no allocation once warm
+    const std::size_t named = std::min<std::size_t>(f.slipping_elements, f.slipping_ids.size());
+    for (std::size_t k = 0; k < named; ++k)
+      slipping.Add(f.slipping_ids[k]);
     d.set_max_fz_n(std::isfinite(f.max_fz_n) ? f.max_fz_n : 0.0);
   }
 }

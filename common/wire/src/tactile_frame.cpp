@@ -43,6 +43,51 @@ void fill_tactile_frame(const std::string& sensor_id, const FrameHeader& h,
   }
 }
 
+namespace {
+
+// One element into core units, centroids scaled by `px_per_mm`; false when a number is not
+// finite (also once scaled) or G is negative.
+bool read_element(const v1::ElementReading& e, double px_per_mm, ElementReading& r) noexcept {
+  const double values[] = {e.g(),     e.x_mm(),  e.y_mm(), e.dx_mm(), e.dy_mm(),
+                           e.ux_mm(), e.uy_mm(), e.fx_n(), e.fy_n(),  e.fz_n()};
+  for (double v : values) {
+    if (!std::isfinite(v)) return false;
+  }
+  if (e.g() < 0) return false;
+  // A finite centroid in mm can still overflow to infinity in pixels (fuzzing found
+  // y_mm = -1.5e308): the core's units must be finite too.
+  const double x_px = e.x_mm() * px_per_mm;
+  const double y_px = e.y_mm() * px_per_mm;
+  if (!std::isfinite(x_px) || !std::isfinite(y_px)) return false;
+  r.id = e.id();
+  r.contact = e.contact();
+  r.has_displacement = e.has_displacement() && e.contact();
+  r.G = e.g();
+  r.x_px = x_px;
+  r.y_px = y_px;
+  r.dx_mm = e.dx_mm();
+  r.dy_mm = e.dy_mm();
+  r.ux_mm = e.ux_mm();
+  r.uy_mm = e.uy_mm();
+  r.fx = e.fx_n();
+  r.fy = e.fy_n();
+  r.fz = e.fz_n();
+  return true;
+}
+
+// `out` resized to `n` readings (no allocation when it has them); false when memory runs out.
+bool sized(std::vector<ElementReading>& out, std::size_t n) noexcept {
+  if (out.size() == n) return true;
+  try {
+    out.resize(n);
+  } catch (...) {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 DecodeStatus read_tactile_frame(const v1::TactileFrame& in, const Calibration& cal,
                                 ReceivedFrame& out) noexcept {
   FrameHeader& h = out.header;
@@ -57,13 +102,7 @@ DecodeStatus read_tactile_frame(const v1::TactileFrame& in, const Calibration& c
   h.measure_time_us = in.measure_time_us();
   if (!v1::FrameStatus_IsValid(h.status) || !std::isfinite(h.measure_time_us))
     return DecodeStatus::kInvalid;
-  if (out.elements.size() != cal.elements.size()) {
-    try {
-      out.elements.resize(cal.elements.size());
-    } catch (...) {
-      return DecodeStatus::kInvalid;
-    }
-  }
+  if (!sized(out.elements, cal.elements.size())) return DecodeStatus::kInvalid;
   if (h.status != v1::FRAME_STATUS_COMPLETE) {
     return in.elements_size() == 0 ? DecodeStatus::kOk : DecodeStatus::kInvalid;
   }
@@ -73,32 +112,21 @@ DecodeStatus read_tactile_frame(const v1::TactileFrame& in, const Calibration& c
   for (int i = 0; i < in.elements_size(); ++i) {
     const v1::ElementReading& e = in.elements(i);
     const auto k = static_cast<std::size_t>(i);
-    if (e.id() != cal.elements[k].id) return DecodeStatus::kInvalid;
-    const double values[] = {e.g(),     e.x_mm(),  e.y_mm(), e.dx_mm(), e.dy_mm(),
-                             e.ux_mm(), e.uy_mm(), e.fx_n(), e.fy_n(),  e.fz_n()};
-    for (double v : values) {
-      if (!std::isfinite(v)) return DecodeStatus::kInvalid;
-    }
-    if (e.g() < 0) return DecodeStatus::kInvalid;
-    // A finite centroid in mm can still overflow to infinity in pixels (fuzzing found
-    // y_mm = -1.5e308): the core's units must be finite too.
-    const double x_px = e.x_mm() * px_per_mm;
-    const double y_px = e.y_mm() * px_per_mm;
-    if (!std::isfinite(x_px) || !std::isfinite(y_px)) return DecodeStatus::kInvalid;
-    ElementReading& r = out.elements[k];
-    r.id = e.id();
-    r.contact = e.contact();
-    r.has_displacement = e.has_displacement() && e.contact();
-    r.G = e.g();
-    r.x_px = x_px;
-    r.y_px = y_px;
-    r.dx_mm = e.dx_mm();
-    r.dy_mm = e.dy_mm();
-    r.ux_mm = e.ux_mm();
-    r.uy_mm = e.uy_mm();
-    r.fx = e.fx_n();
-    r.fy = e.fy_n();
-    r.fz = e.fz_n();
+    if (e.id() != cal.elements[k].id || !read_element(e, px_per_mm, out.elements[k]))
+      return DecodeStatus::kInvalid;
+  }
+  return DecodeStatus::kOk;
+}
+
+DecodeStatus read_elements(const v1::TactileFrame& in, std::vector<ElementReading>& out) noexcept {
+  if (in.status() != v1::FRAME_STATUS_COMPLETE) {
+    out.clear();
+    return in.elements_size() == 0 ? DecodeStatus::kOk : DecodeStatus::kInvalid;
+  }
+  const auto n = static_cast<std::size_t>(in.elements_size());
+  if (!sized(out, n)) return DecodeStatus::kInvalid;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!read_element(in.elements(static_cast<int>(k)), 1.0, out[k])) return DecodeStatus::kInvalid;
   }
   return DecodeStatus::kOk;
 }

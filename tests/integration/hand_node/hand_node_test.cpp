@@ -184,6 +184,11 @@ struct RunResult {
   std::uint64_t decisions_naming_unknown_frames = 0;
   std::uint64_t decisions_without_receive_time = 0;
   std::uint64_t decisions_with_slip = 0;
+  // Slipping fingertips of the Decisions, and those naming exactly as many element ids as they
+  // count; the detectors the Decisions name.
+  std::uint64_t slipping_fingertips = 0;
+  std::uint64_t slipping_fingertips_naming_their_elements = 0;
+  std::set<std::string> slip_detectors;
   std::set<std::uint64_t> decision_commands;
   std::set<std::uint64_t> command_sequences;  // the commands received on the arm link
   int frames = 0;                             // exposures published (each to both fingertips)
@@ -458,6 +463,14 @@ class HandNodeRun {
       if (std::any_of(d.fingertips().begin(), d.fingertips().end(),
                       [](const v1::FingertipDecision& t) { return t.slip(); }))
         ++r.decisions_with_slip;
+      for (const v1::FingertipDecision& t : d.fingertips()) {
+        if (!t.slip()) continue;
+        ++r.slipping_fingertips;
+        const auto named = static_cast<std::uint32_t>(t.slipping_element_ids_size());
+        if (named > 0 && named == t.slipping_elements())
+          ++r.slipping_fingertips_naming_their_elements;
+      }
+      r.slip_detectors.insert(d.slip_detector());
       if (d.command_sequence() > 0) r.decision_commands.insert(d.command_sequence());
     }
     if (bridge) {
@@ -596,6 +609,9 @@ TEST(HandNode, RunsThePapersTaskAndEndsDone) {
       << r.decisions << " decisions of " << after_first << " frames";
   // The injected slips were decided as such, and every command a decision names reached the arm.
   EXPECT_GE(r.decisions_with_slip, 4U);
+  // Each names its slipping elements (what the viewers draw) and the detector that decided.
+  EXPECT_EQ(r.slipping_fingertips_naming_their_elements, r.slipping_fingertips);
+  EXPECT_EQ(r.slip_detectors, std::set<std::string>{"paper"});
   ASSERT_FALSE(r.decision_commands.empty());
   for (const std::uint64_t c : r.decision_commands)
     EXPECT_TRUE(r.command_sequences.count(c)) << "command " << c;

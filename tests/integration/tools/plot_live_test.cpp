@@ -81,6 +81,51 @@ TEST(Plot, WithoutPositionsFig10IsAgainstTimeAndSaysSo) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "timeline.png"));
 }
 
+// The flags drawn are hand_node's, and the program says who decided them: hand_node's detector,
+// nobody (a log without Decisions), or the detector --recompute names.
+TEST(Plot, SaysWhoDecidedTheFlags) {
+  TempDir dir;
+  write_test_log(dir / "decided.tlog", false, true, true);
+  write_test_log(dir / "frames.tlog", false);
+  const auto plot = [&](const std::string& log, std::vector<std::string> extra) {
+    std::vector<std::string> argv{TACTILE_PLOT_PATH,      (dir / log).string(), "-o",
+                                  (dir / "out").string(), "--figure",           "timeline"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    const auto r = testing::run(argv, 60s);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.out;
+  };
+  EXPECT_NE(plot("decided.tlog", {}).find("flags: hand_node (learned)\n"), std::string::npos);
+  EXPECT_NE(plot("frames.tlog", {}).find("no hand_node decisions in the log: no flags"),
+            std::string::npos);
+  EXPECT_NE(plot("decided.tlog", {"--recompute", "field"}).find("flags: recomputed (field)\n"),
+            std::string::npos);
+  const auto r =
+      testing::run({TACTILE_PLOT_PATH, (dir / "frames.tlog").string(), "--recompute", "papers"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("must be paper, field or learned"), std::string::npos) << r.err;
+}
+
+// --calibration as --help shows it, once per file, and as a list after one flag: both read both
+// files (here missing: the first is named) and keep the last argument for the log.
+TEST(Plot, CalibrationFilesOncePerFlagOrAsAList) {
+  TempDir dir;
+  write_test_log(dir / "run.tlog", false);
+  const std::string a = (dir / "a.yaml").string();
+  const std::string b = (dir / "b.yaml").string();
+  for (const auto& argv :
+       {std::vector<std::string>{TACTILE_PLOT_PATH, "--calibration", a, "--calibration", b,
+                                 (dir / "run.tlog").string()},
+        std::vector<std::string>{TACTILE_PLOT_PATH, "--calibration", a, b,
+                                 (dir / "run.tlog").string()}}) {
+    const auto r = testing::run(argv);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find(a), std::string::npos) << r.err;
+  }
+  const auto help = testing::run({TACTILE_PLOT_PATH, "--help"});
+  EXPECT_NE(help.out.find("--calibration FILE "), std::string::npos) << help.out;
+}
+
 TEST(Plot, AtPastTheEndIsAnErrorNamingTheRecordingsTimeRange) {
   TempDir dir;
   write_test_log(dir / "run.tlog", true);
@@ -144,6 +189,17 @@ void publish_until(wire::Publisher& frames, wire::Publisher& events, Done done) 
       e->set_text("re-compress");
       wire::encode(env, buf);
       events.send(wire::kEventTopic, wire::bytes_of(buf));
+      // hand_node's decision on this frame: element 4 of the left fingertip slips.
+      auto* d = env.mutable_decision();
+      d->Clear();
+      d->set_slip_detector("learned");
+      auto* t = d->add_fingertips();
+      t->set_sensor_id("left");
+      t->set_slip(true);
+      t->set_touch(true);
+      t->add_slipping_element_ids(4);
+      wire::encode(env, buf);
+      events.send(wire::kDecisionTopic, wire::bytes_of(buf));
     }
     ++k;
     std::this_thread::sleep_for(5ms);
@@ -159,7 +215,8 @@ TEST(Live, LineModeFollowsRealPublishers) {
     const std::string out = live.out_so_far();
     return out.find("right seq=") != std::string::npos &&
            out.find("RECOMPRESS left e4 re-compress") != std::string::npos &&
-           out.find("phase=TRANSPORT") != std::string::npos;
+           out.find("phase=TRANSPORT") != std::string::npos &&
+           out.find("by=hand_node") != std::string::npos;
   });
   live.signal(SIGINT);
   const auto r = live.wait(10s);
@@ -170,6 +227,10 @@ TEST(Live, LineModeFollowsRealPublishers) {
       << r.out;
   EXPECT_NE(r.out.find("event "), std::string::npos);
   EXPECT_NE(r.out.find("RECOMPRESS left e4 re-compress"), std::string::npos) << r.out;
+  // hand_node's decisions come on its events endpoint, topic decision: shown as decided there.
+  EXPECT_TRUE(std::regex_search(r.out, std::regex("left seq=\\d+ .* flags=TOUCH,SLIP slipping=4 "
+                                                  "by=hand_node detector=learned ")))
+      << r.out;
   EXPECT_EQ(r.out.find("\x1b"), std::string::npos);  // no escape codes into a pipe
 }
 

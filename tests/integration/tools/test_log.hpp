@@ -46,9 +46,12 @@ inline void fill_frame(v1::TactileFrame& f, const std::string& id, std::uint64_t
 
 // A log of 100 frames of "left" and "right" 10 ms apart (sequence k at 10 k ms + 0.5 ms from the
 // first record), with ground truth when asked, and hand_node's events at frames 3 (grasping
-// ended, phase GRASP), 28, 53 (re-compress, TRANSPORT) and 78 (re-compress, LOWER).
+// ended, phase GRASP), 28, 53 (re-compress, TRANSPORT) and 78 (re-compress, LOWER). With
+// `with_decisions`, hand_node's Decision on each pair of frames 0.1 ms after them (detector
+// "learned"), which disagrees with the paper's rule: no slip on frames where element 4 moves
+// beyond dr, and SLIP with element 7 marked on every frame 10 j + 5, where nothing moves.
 inline void write_test_log(const std::filesystem::path& path, bool with_truth,
-                           bool with_frames = true) {
+                           bool with_frames = true, bool with_decisions = false) {
   recording::LogWriter w(path, v1::LogHeader{}, {});
   v1::Envelope env;
   std::string buf;
@@ -70,6 +73,30 @@ inline void write_test_log(const std::filesystem::path& path, bool with_truth,
       wire::encode(env, buf);
       ASSERT_EQ(w.append(t + 500'000, wire::frame_topic(id), "tcp://sensor",
                          v1::PAYLOAD_KIND_ENVELOPE, wire::bytes_of(buf)),
+                recording::WriteStatus::kOk);
+    }
+    if (with_decisions) {
+      auto* d = env.mutable_decision();
+      d->Clear();
+      d->set_time_ns(t + 600'000);
+      d->set_slip_detector("learned");
+      for (const char* id : {"left", "right"}) {
+        auto* a = d->add_answers();
+        a->set_sensor_id(id);
+        a->set_sequence(k);
+        auto* tip = d->add_fingertips();
+        tip->set_sensor_id(id);
+        const bool slip = std::string(id) == "left" && k % 10 == 5;
+        tip->set_touch(true);
+        tip->set_slip(slip);
+        if (slip) {
+          tip->set_slipping_elements(1);
+          tip->add_slipping_element_ids(7);
+        }
+      }
+      wire::encode(env, buf);
+      ASSERT_EQ(w.append(t + 600'000, wire::kDecisionTopic, "tcp://hand", v1::PAYLOAD_KIND_ENVELOPE,
+                         wire::bytes_of(buf)),
                 recording::WriteStatus::kOk);
     }
     if (k % 25 == 3) {

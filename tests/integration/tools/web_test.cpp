@@ -10,8 +10,10 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <regex>
 
 #include "tactile/control/config.hpp"
@@ -44,7 +46,8 @@ bool slipping(const v1::ElementReading& e, const control::Config& c) {
 // The fingertip's frame `kFrame` as the recording holds it, and its flags by the paper's rules
 // as docs/control.md states them (TOUCH: some F_z > F1 or SLIP; SLIP: some element slipping;
 // OVER: some F_z > F2), with the thresholds tactile_web runs with by default, outside Phase II.
-Expected expected_from(const tools_test::LogContents& log, const std::string& sensor) {
+Expected expected_from(const tools_test::LogContents& log, const std::string& sensor,
+                       std::uint64_t frame = kFrame) {
   const control::Config c;
   Expected x;
   wire::EnvelopeDecoder decoder;
@@ -52,7 +55,7 @@ Expected expected_from(const tools_test::LogContents& log, const std::string& se
     if (rec.topic() != wire::frame_topic(sensor)) continue;
     EXPECT_EQ(decoder.decode(wire::bytes_of(rec.payload())), wire::DecodeStatus::kOk);
     const v1::TactileFrame& f = decoder.envelope().tactile_frame();
-    if (f.sequence() != kFrame) continue;
+    if (f.sequence() != frame) continue;
     for (const auto& e : f.elements()) {
       if (e.id() == kElement) {
         x.element = e;
@@ -66,7 +69,7 @@ Expected expected_from(const tools_test::LogContents& log, const std::string& se
     x.touch = x.touch || x.slip;
     return x;
   }
-  ADD_FAILURE() << "no frame " << kFrame << " of " << sensor << " in the recording";
+  ADD_FAILURE() << "no frame " << frame << " of " << sensor << " in the recording";
   return x;
 }
 
@@ -93,6 +96,19 @@ std::string fixed3(double v) {
   return b;
 }
 
+// The page at `url` in Debian's headless Chromium, its DOM on standard output. Chromium as root
+// needs --no-sandbox; a profile of its own leaves nothing behind. A page held by ?freeze= closes
+// its stream, so the virtual time runs out and the DOM is dumped.
+testing::ProcessResult page_dom(const std::string& url) {
+  TempDir profile;
+  Process chromium({"chromium", "--headless", "--no-sandbox", "--disable-gpu",
+                    "--user-data-dir=" + profile.path().string(), "--no-first-run",
+                    "--disable-extensions", "--disable-background-networking", "--disable-sync",
+                    "--disable-component-update", "--no-default-browser-check",
+                    "--virtual-time-budget=5000", "--dump-dom", url});
+  return chromium.wait(60s);
+}
+
 TEST(Web, ChromiumShowsTheRecordingsFlagsPhaseAndForcesAtAFrame) {
   TempDir dir;
   const auto log_path = dir / "run.tlog";
@@ -107,22 +123,15 @@ TEST(Web, ChromiumShowsTheRecordingsFlagsPhaseAndForcesAtAFrame) {
   const auto endpoint =
       await_match([&] { return replay.err_so_far(); }, "publishing on (tcp://\\S+)");
   ASSERT_TRUE(endpoint) << replay.err_so_far();
-  Process web({TACTILE_WEB_PATH, *endpoint, "--listen", "127.0.0.1:0"});
+  // The recording holds no hand_node Decisions: the page recomputes with the paper's rule, as
+  // asked, and says so.
+  Process web({TACTILE_WEB_PATH, *endpoint, "--listen", "127.0.0.1:0", "--recompute", "paper"});
   const auto url = await_match([&] { return web.out_so_far(); }, "serving (http://\\S+)");
   ASSERT_TRUE(url) << web.err_so_far();
   const auto played = replay.wait(20s);
   ASSERT_EQ(played.exit_code, 0) << played.err;
 
-  // Chromium as root needs --no-sandbox; a profile of its own leaves nothing behind. The page
-  // closes its stream once held, so the virtual time runs out and the DOM is dumped.
-  TempDir profile;
-  Process chromium({"chromium", "--headless", "--no-sandbox", "--disable-gpu",
-                    "--user-data-dir=" + profile.path().string(), "--no-first-run",
-                    "--disable-extensions", "--disable-background-networking", "--disable-sync",
-                    "--disable-component-update", "--no-default-browser-check",
-                    "--virtual-time-budget=5000", "--dump-dom",
-                    *url + "?freeze=" + std::to_string(kFrame)});
-  const auto shown = chromium.wait(60s);
+  const auto shown = page_dom(*url + "?freeze=" + std::to_string(kFrame));
   ASSERT_FALSE(shown.timed_out) << shown.err;
   ASSERT_EQ(shown.exit_code, 0) << shown.err;
   const std::string& dom = shown.out;
@@ -137,6 +146,8 @@ TEST(Web, ChromiumShowsTheRecordingsFlagsPhaseAndForcesAtAFrame) {
   EXPECT_EQ(text(dom, "phase"), "TRANSPORT");
   EXPECT_EQ(attribute(dom, "flag-MOVE", "data-on"), "1");
   EXPECT_EQ(attribute(dom, "flag-SEARCH", "data-on"), "0");
+  EXPECT_EQ(text(dom, "flags-by"), "flags: recomputed (paper)");
+  EXPECT_EQ(attribute(dom, "flags-by", "data-from"), "recomputed");
   EXPECT_EQ(attribute(dom, "events", "data-total"), "2");
   EXPECT_TRUE(std::regex_search(dom, std::regex("<li>[0-9:.]+ RECOMPRESS left e4 re-compress</li>"
                                                 "<li>[0-9:.]+ GRASPING_ENDED</li>")));
@@ -239,23 +250,73 @@ class RawClient {
   bool connected_ = false;
 };
 
+// The tools' recording played as fast as possible into a tactile_web (on a free port, with
+// `web_options`) that is its only subscriber besides the two the replay waits for.
+class ReplayedIntoWeb {
+ public:
+  // `replay_options` added to tactile_replay's; `with_decisions`: hand_node's Decisions in the
+  // recording (tools_test::write_test_log).
+  explicit ReplayedIntoWeb(const std::vector<std::string>& web_options,
+                           const std::vector<std::string>& replay_options = {},
+                           bool with_decisions = false) {
+    tools_test::write_test_log(log_path(), false, true, with_decisions);
+    std::vector<std::string> replay{TACTILE_REPLAY_PATH,
+                                    log_path().string(),
+                                    "--publish",
+                                    "tcp://127.0.0.1:*",
+                                    "--as-fast-as-possible",
+                                    "--wait-subscriptions",
+                                    "3",
+                                    "--wait-timeout",
+                                    "20"};
+    replay.insert(replay.end(), replay_options.begin(), replay_options.end());
+    replay_.emplace(replay);
+    const auto endpoint =
+        await_match([&] { return replay_->err_so_far(); }, "publishing on (tcp://\\S+)");
+    if (!endpoint) {
+      error_ = replay_->err_so_far();
+      return;
+    }
+    std::vector<std::string> argv{TACTILE_WEB_PATH, *endpoint, "--listen", "127.0.0.1:0"};
+    argv.insert(argv.end(), web_options.begin(), web_options.end());
+    web_.emplace(argv);
+    const auto port =
+        await_match([&] { return web_->out_so_far(); }, "serving http://127.0.0.1:(\\d+)/");
+    if (!port) {
+      error_ = web_->err_so_far();
+      return;
+    }
+    port_ = std::stoi(*port);
+  }
+  bool started() const { return port_ > 0; }
+  const std::string& error() const { return error_; }
+  Process& replay() { return *replay_; }
+  Process& web() { return *web_; }
+  int port() const { return port_; }
+  std::filesystem::path log_path() const { return dir_ / "run.tlog"; }
+
+ private:
+  TempDir dir_;
+  std::optional<Process> replay_;
+  std::optional<Process> web_;
+  std::string error_;
+  int port_ = 0;
+};
+
+// GET /state: the latest update, as tactile_web holds it.
+std::string latest_update(int port) {
+  RawClient c(port, "GET /state HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
+  return c.read(2s);
+}
+
 // Two browsers that stopped reading hold the only two event streams: a third is refused (503),
 // and every message still goes through the model (GET /state counts them) while they hang.
 TEST(Web, StuckBrowsersNeverHoldUpTheSubscriberAndViewersAreBounded) {
-  TempDir dir;
-  const auto log_path = dir / "run.tlog";
-  tools_test::write_test_log(log_path, false);
-  Process replay({TACTILE_REPLAY_PATH, log_path.string(), "--publish", "tcp://127.0.0.1:*",
-                  "--as-fast-as-possible", "--wait-subscriptions", "3", "--wait-timeout", "20"});
-  const auto endpoint =
-      await_match([&] { return replay.err_so_far(); }, "publishing on (tcp://\\S+)");
-  ASSERT_TRUE(endpoint) << replay.err_so_far();
-  Process web({TACTILE_WEB_PATH, *endpoint, "--listen", "127.0.0.1:0", "--max-viewers", "2",
-               "--rate", "0"});
-  const auto port =
-      await_match([&] { return web.out_so_far(); }, "serving http://127.0.0.1:(\\d+)/");
-  ASSERT_TRUE(port) << web.err_so_far();
-  const int p = std::stoi(*port);
+  ReplayedIntoWeb run({"--max-viewers", "2", "--rate", "0"});
+  ASSERT_TRUE(run.started()) << run.error();
+  Process& replay = run.replay();
+  Process& web = run.web();
+  const int p = run.port();
   const std::string stream = "GET /stream HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
   RawClient stuck1(p, stream);
   RawClient stuck2(p, stream);
@@ -271,17 +332,93 @@ TEST(Web, StuckBrowsersNeverHoldUpTheSubscriberAndViewersAreBounded) {
   // 100 frames of two fingertips and 4 events, about 2 MB of updates for each stream: all taken
   // in while both stuck streams are still open (a stuck stream is let go only after 2 s of not
   // taking its update).
-  const auto taken = await_match(
-      [&] {
-        RawClient c(p, "GET /state HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
-        return c.read(2s);
-      },
-      "\"streams\":(\\d+),\"time_ns\":\\d+,\"messages\":204,", 10s);
+  const auto taken = await_match([&] { return latest_update(p); },
+                                 "\"streams\":(\\d+),\"time_ns\":\\d+,\"messages\":204,", 10s);
   ASSERT_TRUE(taken) << "tactile_web did not take in every message";
   EXPECT_EQ(*taken, "2");
   web.signal(SIGINT);
   const auto stopped = web.wait(10s);
   EXPECT_EQ(stopped.exit_code, 0) << stopped.err;
+}
+
+// A page that joins after the stream ended: it shows the final state at once and its charts hold
+// the points of the updates before it joined (the 'history' event), not one point; without a
+// --recompute and without hand_node's Decisions in the recording, it says that no one decided.
+TEST(Web, APageThatJoinsLateFillsItsChartsAtOnce) {
+  ReplayedIntoWeb run({"--rate", "0"});
+  ASSERT_TRUE(run.started()) << run.error();
+  const auto played = run.replay().wait(20s);
+  ASSERT_EQ(played.exit_code, 0) << played.err;
+  const int p = run.port();
+  // Every message taken in before the page joins.
+  ASSERT_TRUE(await_match([&] { return latest_update(p); }, "\"messages\":(204),", 10s));
+
+  // The stream's first bytes: the charts' points before the latest update, then the update.
+  RawClient late(p, "GET /stream HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
+  const std::string got = late.read(1s, 1 << 20);
+  const std::string head = "event: history\ndata: [";
+  const auto from = got.find(head);
+  ASSERT_NE(from, std::string::npos) << got.substr(0, 400);
+  const auto to = got.find("]\n\n", from);
+  ASSERT_NE(to, std::string::npos);
+  const std::string history = got.substr(from + head.size(), to - from - head.size());
+  std::smatch m;
+  std::ptrdiff_t points = 0;
+  for (auto at = history.find("\"time_ns\":"); at != std::string::npos;
+       at = history.find("\"time_ns\":", at + 1))
+    ++points;
+  // One point per update before the one sent with it (an update after every message here), at
+  // most the 299 the page's charts keep besides it.
+  ASSERT_TRUE(std::regex_search(got, m, std::regex("data: \\{\"update\":(\\d+),")));
+  const long update = std::stol(m[1].str());
+  EXPECT_GE(update, 204);
+  EXPECT_EQ(points, std::min(update - 1, 299L)) << history.substr(0, 400);
+  EXPECT_NE(got.find("data: {\"update\":"), std::string::npos);
+  EXPECT_LT(got.find("event: history"), got.find("data: {\"update\":"));
+  EXPECT_NE(got.find("\"flags_from\":\"none\""), std::string::npos);
+
+  // The page in a browser: charts filled from the history, and no one's flags shown as decided.
+  const auto shown = page_dom("http://127.0.0.1:" + std::to_string(p) + "/?freeze=99");
+  ASSERT_FALSE(shown.timed_out) << shown.err;
+  ASSERT_EQ(shown.exit_code, 0) << shown.err;
+  EXPECT_EQ(attribute(shown.out, "fingertip-left", "data-sequence"), "99");
+  const std::string chart_points = attribute(shown.out, "side", "data-chart-points");
+  EXPECT_GE(std::atoi(chart_points.c_str()), 200) << chart_points;  // without history: 1
+  EXPECT_EQ(attribute(shown.out, "fingertip-left", "data-decided"), "0");
+  EXPECT_NE(text(shown.out, "flags-by").find("flags: no decisions from hand_node"),
+            std::string::npos)
+      << text(shown.out, "flags-by");
+
+  run.web().signal(SIGINT);
+  EXPECT_EQ(run.web().wait(10s).exit_code, 0);
+}
+
+// A recording with hand_node's Decisions that disagree with the paper's rule, played up to frame
+// 55 (and its Decision): the page shows hand_node's flags and slipping element, named by its
+// detector, where the paper's rule would show no slip at all (nothing moves in frame 55).
+TEST(Web, ChromiumShowsHandNodesDecisionsNotThePapersRule) {
+  ReplayedIntoWeb run({"--rate", "0"}, {"--to", "0.5505"}, true);
+  ASSERT_TRUE(run.started()) << run.error();
+  const auto played = run.replay().wait(20s);
+  ASSERT_EQ(played.exit_code, 0) << played.err;
+  // Frames 0-55 of both fingertips, their 56 Decisions and 3 events taken in.
+  ASSERT_TRUE(await_match([&] { return latest_update(run.port()); }, "\"messages\":(171),", 10s));
+  const auto shown = page_dom("http://127.0.0.1:" + std::to_string(run.port()) + "/?freeze=55");
+  ASSERT_FALSE(shown.timed_out) << shown.err;
+  ASSERT_EQ(shown.exit_code, 0) << shown.err;
+  const std::string& dom = shown.out;
+  EXPECT_EQ(attribute(dom, "fingertip-left", "data-sequence"), "55") << dom;
+  EXPECT_EQ(text(dom, "flags-by"), "flags: hand_node (learned)");
+  EXPECT_EQ(attribute(dom, "fingertip-left", "data-decided"), "1");
+  EXPECT_EQ(attribute(dom, "flag-left-SLIP", "data-on"), "1");
+  EXPECT_EQ(attribute(dom, "flag-right-SLIP", "data-on"), "0");
+  EXPECT_EQ(attribute(dom, "element-left-7", "data-slip"), "1");
+  EXPECT_EQ(attribute(dom, "element-left-4", "data-slip"), "0");
+  // The paper's rule on frame 55 of the recording: no element moves beyond dr.
+  const auto log = tools_test::read_log(run.log_path());
+  EXPECT_FALSE(expected_from(log, "left", 55).slip);
+  run.web().signal(SIGINT);
+  EXPECT_EQ(run.web().wait(10s).exit_code, 0);
 }
 
 }  // namespace

@@ -172,6 +172,36 @@ TEST(FlagAnalyzer, NamesTheLargestForceOverallAndAmongSlipping) {
   EXPECT_DOUBLE_EQ(f.max_slip_mm, 0.03);
 }
 
+TEST(FlagAnalyzer, NamesTheSlippingElementsByIdInInputOrder) {
+  const FlagAnalyzer a{Config{}};
+  std::vector<ElementReading> e{element(0.4, 0.01, 0), element(1.2), element(0.9, 0, 0.02),
+                                element(0.2, 0.03, 0)};
+  for (std::size_t i = 0; i < e.size(); ++i)
+    e[i].id = static_cast<std::uint32_t>(30 - i);  // ids unlike the indices
+  FingertipInput in;
+  in.elements = e;
+  in.fresh = true;
+  const FingertipFlags f = a.analyze(in, false);
+  ASSERT_EQ(f.slipping_elements, 3U);
+  EXPECT_EQ(f.slipping_ids[0], 30U);
+  EXPECT_EQ(f.slipping_ids[1], 28U);
+  EXPECT_EQ(f.slipping_ids[2], 27U);
+  // From a detector's decisions: only those it marked, whatever their displacement.
+  FingertipSlip slip;
+  slip.state[1] = ElementSlipState::kIncipient;
+  const FingertipFlags g = a.analyze(in, slip);
+  ASSERT_EQ(g.slipping_elements, 1U);
+  EXPECT_EQ(g.slipping_ids[0], 29U);
+  // More slipping elements than the ids hold: all counted, the first kMaxSlipElements named.
+  std::vector<ElementReading> many(kMaxSlipElements + 5, element(0.4, 0.01, 0));
+  for (std::size_t i = 0; i < many.size(); ++i)
+    many[i].id = static_cast<std::uint32_t>(i + 100);
+  in.elements = many;
+  const FingertipFlags h = a.analyze(in, false);
+  EXPECT_EQ(h.slipping_elements, kMaxSlipElements + 5);
+  EXPECT_EQ(h.slipping_ids[kMaxSlipElements - 1], 100U + kMaxSlipElements - 1);
+}
+
 TEST(FlagAnalyzer, BothFingertipsAndTheModes) {
   const FlagAnalyzer a{Config{}};
   const std::vector<ElementReading> quiet{element(0.1)};

@@ -2,6 +2,7 @@
 // large, a narrow and a tiny window, with and without colour; and the model fed real messages.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <initializer_list>
@@ -10,8 +11,10 @@
 #include <vector>
 
 #include "dashboard.hpp"
+#include "tactile/cli/run.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/wire/envelope.hpp"
+#include "viewer.hpp"
 
 namespace tactile::live {
 namespace {
@@ -22,6 +25,8 @@ LiveState fixed_state() {
   s.messages = 12345;
   s.phase = "TWIST_TURN";
   s.cycle = 2;
+  s.flags_from = FlagSource::kHandNode;
+  s.detector = "learned";
   s.rates = {{wire::frame_topic("left"), 100.0},
              {wire::frame_topic("right"), 99.5},
              {wire::kEventTopic, 0.5},
@@ -33,6 +38,7 @@ LiveState fixed_state() {
     f.status = "COMPLETE";
     f.fps = std::string(id) == "left" ? 100.0 : 99.5;
     f.lost = std::string(id) == "left" ? 0 : 2;
+    f.decided = true;
     for (std::uint32_t e = 0; e < 41; ++e) {
       ElementCell c;
       c.id = e;
@@ -193,8 +199,10 @@ TEST(LiveRender, DomeLayoutIsTheRingsOrTheCalibration) {
   EXPECT_DOUBLE_EQ(c[1][1], 20.0);
 }
 
+// Recomputed with the paper's rule (hand_node's decisions are shown by default: see
+// viewers_decision_test.cpp).
 TEST(LiveModel, FramesEventsAndStatsBecomeTheState) {
-  LiveModel m({});
+  LiveModel m({control::Config{}, 8, control::SlipDetectorKind::kPaper});
   v1::Envelope env;
   std::string buf;
   std::int64_t now = 1'000'000'000;
@@ -250,8 +258,39 @@ TEST(LiveModel, FramesEventsAndStatsBecomeTheState) {
   EXPECT_EQ(s.messages, 7U);
   EXPECT_EQ(s.undecodable, 1U);
   EXPECT_NE(summary_lines(s).find("left seq=5 "), std::string::npos) << summary_lines(s);
-  EXPECT_NE(summary_lines(s).find("flags=TOUCH,SLIP,OVER phase=TWIST_TURN"), std::string::npos)
+  EXPECT_NE(summary_lines(s).find("flags=TOUCH,SLIP,OVER slipping=7 by=recomputed "
+                                  "detector=paper phase=TWIST_TURN"),
+            std::string::npos)
       << summary_lines(s);
+}
+
+// --calibration as --help shows it, FILE ...: the list ends at the first endpoint, which with
+// the rest joins the endpoints, wherever the endpoints stand.
+TEST(ViewerOptions, CalibrationListEndsAtTheFirstEndpoint) {
+  const auto parse = [](std::vector<std::string> args) {
+    ViewerOptions o;
+    CLI::App app;
+    add_viewer_options(app, o, "F2");
+    std::reverse(args.begin(), args.end());  // CLI11 takes a vector of arguments last first
+    app.parse(args);
+    settle_endpoints(o);
+    return o;
+  };
+  ViewerOptions o =
+      parse({"--calibration", "a.yaml", "b.yaml", "tcp://127.0.0.1:5555", "ipc:///tmp/events"});
+  EXPECT_EQ(o.calibrations, (std::vector<std::string>{"a.yaml", "b.yaml"}));
+  EXPECT_EQ(o.endpoints, (std::vector<std::string>{"tcp://127.0.0.1:5555", "ipc:///tmp/events"}));
+  o = parse({"tcp://127.0.0.1:5555", "--calibration", "a.yaml", "b.yaml", "--f2", "3"});
+  EXPECT_EQ(o.calibrations, (std::vector<std::string>{"a.yaml", "b.yaml"}));
+  EXPECT_EQ(o.endpoints, (std::vector<std::string>{"tcp://127.0.0.1:5555"}));
+  o = parse({"--calibration", "a.yaml", "--calibration", "b.yaml", "tcp://127.0.0.1:5555"});
+  EXPECT_EQ(o.calibrations, (std::vector<std::string>{"a.yaml", "b.yaml"}));
+  EXPECT_EQ(o.endpoints, (std::vector<std::string>{"tcp://127.0.0.1:5555"}));
+  EXPECT_THROW(parse({"--calibration", "a.yaml", "b.yaml"}), cli::UsageError);
+  ViewerOptions shown;
+  CLI::App app;
+  add_viewer_options(app, shown, "F2");
+  EXPECT_NE(app.help().find("--calibration FILE ..."), std::string::npos) << app.help();
 }
 
 }  // namespace

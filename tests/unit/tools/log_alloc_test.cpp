@@ -2,6 +2,8 @@
 // their buffers have grown (docs/architecture.md, rule 4).
 #include <gtest/gtest.h>
 
+#include <optional>
+
 #include "alloc_counter.hpp"
 #include "dashboard.hpp"
 #include "process.hpp"
@@ -46,9 +48,9 @@ TEST(LogWriterAlloc, AppendAllocatesNothingInSteadyState) {
 namespace tactile::live {
 namespace {
 
-// tactile_live takes each frame without allocating once it has seen the fingertip.
-TEST(LiveModelAlloc, FramesAllocateNothingInSteadyState) {
-  LiveModel m({});
+// tactile_live takes each frame, and each of hand_node's decisions, without allocating once it
+// has seen the fingertip: showing hand_node's decisions, and recomputing with each detector.
+TEST(LiveModelAlloc, FramesAndDecisionsAllocateNothingInSteadyState) {
   v1::Envelope env;
   auto* f = env.mutable_tactile_frame();
   f->set_sensor_id("left");
@@ -62,27 +64,56 @@ TEST(LiveModelAlloc, FramesAllocateNothingInSteadyState) {
     r->set_dy_mm(0.001 * e);
   }
   std::vector<std::string> frames;
+  std::vector<std::string> decisions;
   for (std::uint64_t k = 0; k < 60; ++k) {
     f->set_sequence(k);
     std::string buf;
     wire::encode(env, buf);
     frames.push_back(std::move(buf));
   }
-  const std::string topic = wire::frame_topic("left");
-  auto add = [&](std::size_t k) {
-    m.add(topic, wire::bytes_of(frames[k]), static_cast<std::int64_t>(k) * 10'000'000);
-  };
-  for (std::size_t k = 0; k < 10; ++k)
-    add(k);
-  std::size_t allocations = 0;
-  {
-    testing::AllocationScope scope;
-    for (std::size_t k = 10; k < 60; ++k)
-      add(k);
-    allocations = scope.count();
+  v1::Envelope dec;
+  dec.mutable_decision()->set_slip_detector("learned");
+  auto* tip = dec.mutable_decision()->add_fingertips();
+  tip->set_sensor_id("left");
+  for (std::uint64_t k = 0; k < 60; ++k) {
+    tip->set_slip(k % 2 == 0);
+    tip->clear_slipping_element_ids();
+    for (std::uint32_t e = 0; e < k % 5; ++e)
+      tip->add_slipping_element_ids(3 * e);
+    std::string buf;
+    wire::encode(dec, buf);
+    decisions.push_back(std::move(buf));
   }
-  EXPECT_EQ(allocations, 0U);
-  EXPECT_EQ(m.state().fingertips.at(0).sequence, 59U);
+  const std::string topic = wire::frame_topic("left");
+  for (const std::optional<control::SlipDetectorKind> recompute :
+       {std::optional<control::SlipDetectorKind>{},
+        std::optional{control::SlipDetectorKind::kPaper},
+        std::optional{control::SlipDetectorKind::kField},
+        std::optional{control::SlipDetectorKind::kLearned}}) {
+    SCOPED_TRACE(recompute ? control::to_string(*recompute) : "hand_node's decisions");
+    LiveModel m({control::Config{}, 8, recompute});
+    auto add = [&](std::size_t k) {
+      m.add(topic, wire::bytes_of(frames[k]), static_cast<std::int64_t>(k) * 10'000'000);
+      m.add(wire::kDecisionTopic, wire::bytes_of(decisions[k]),
+            static_cast<std::int64_t>(k) * 10'000'000 + 1);
+    };
+    for (std::size_t k = 0; k < 10; ++k)
+      add(k);
+    std::size_t allocations = 0;
+    {
+      testing::AllocationScope scope;
+      for (std::size_t k = 10; k < 60; ++k)
+        add(k);
+      allocations = scope.count();
+    }
+    EXPECT_EQ(allocations, 0U);
+    EXPECT_EQ(m.state().fingertips.at(0).sequence, 59U);
+    // The last decision (59 % 5 = 4 elements: 0, 3, 6, 9) is shown unless recomputing.
+    EXPECT_EQ(m.state().flags_from, recompute ? FlagSource::kRecomputed : FlagSource::kHandNode);
+    if (!recompute) {
+      EXPECT_TRUE(m.state().fingertips.at(0).elements.at(9).slip);
+    }
+  }
 }
 
 // tactile_web: each frame into the model, the update written and handed to the slot, and a
@@ -116,6 +147,7 @@ TEST(WebUpdateAlloc, FramesUpdatesAndAViewerAllocateNothingInSteadyState) {
     }
   }
   std::string update;
+  std::string point;
   std::string viewer;
   std::uint64_t seen = 0;
   web::UpdateCounters counters;
@@ -127,7 +159,8 @@ TEST(WebUpdateAlloc, FramesUpdatesAndAViewerAllocateNothingInSteadyState) {
     m.tick(static_cast<std::int64_t>(k) * 10'000'000, 1'763'700'000'000'000'000);
     ++counters.update;
     writer.write(m.state(), counters, update);
-    slot.publish(update);
+    writer.write_point(m.state(), point);
+    slot.publish(update, point);
     (void)slot.wait_newer(seen, viewer, std::chrono::milliseconds(0));
   };
   for (std::size_t k = 0; k < 20; ++k)

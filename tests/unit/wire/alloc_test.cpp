@@ -4,6 +4,7 @@
 
 #include "alloc_counter.hpp"
 #include "synthetic.hpp"
+#include "tactile/wire/arm.hpp"
 #include "tactile/wire/envelope.hpp"
 #include "tactile/wire/tactile_frame.hpp"
 
@@ -48,6 +49,52 @@ TEST(WireAllocation, FillEncodeDecodeReadAllocateNothingOnceWarm) {
   EXPECT_EQ(allocations, 0U);
   EXPECT_EQ(received.header.sequence, 102U);
   EXPECT_DOUBLE_EQ(received.elements[4].G, 1004.0);
+
+  // The viewers' read, without a calibration, of the same frames.
+  std::vector<ElementReading> viewed;
+  ASSERT_EQ(read_elements(decoder.envelope().tactile_frame(), viewed), DecodeStatus::kOk);
+  {
+    tactile::testing::AllocationScope scope;
+    for (int k = 0; k < 100; ++k)
+      ASSERT_EQ(read_elements(decoder.envelope().tactile_frame(), viewed), DecodeStatus::kOk);
+    allocations = scope.count();
+  }
+  EXPECT_EQ(allocations, 0U);
+  EXPECT_DOUBLE_EQ(viewed[4].G, 1004.0);
+}
+
+// hand_node's Decision of each step, with the slipping elements' ids and the detector's name,
+// filled and encoded into reused storage: once it held the most ids, nothing is allocated.
+TEST(WireAllocation, DecisionFillAndEncodeAllocateNothingOnceWarm) {
+  control::ControllerOutput output;
+  output.slip_detector = control::SlipDetectorKind::kLearned;
+  const FingertipIds ids{"left", "right"};
+  const std::array<std::int64_t, control::kFingertips> received{1, 2};
+  v1::Envelope env;
+  std::string bytes;
+  const auto cycle = [&](std::uint32_t slipping) {
+    for (auto& f : output.flags.fingertip) {
+      f.slip = slipping > 0;
+      f.slipping_elements = slipping;
+      for (std::uint32_t k = 0; k < slipping; ++k)
+        f.slipping_ids[k] = 3 * k;
+    }
+    Answers on;
+    on.add({0, slipping, 7});
+    fill_decision(output, 9, on, received, 0, ids, *env.mutable_decision());
+    encode(env, bytes);
+  };
+  cycle(41);  // warm: the most ids a fingertip of 41 elements names
+  std::size_t allocations = 0;
+  {
+    tactile::testing::AllocationScope scope;
+    for (std::uint32_t s = 0; s < 200; ++s)
+      cycle(s % 42);
+    allocations = scope.count();
+  }
+  EXPECT_EQ(allocations, 0U);
+  EXPECT_EQ(env.decision().fingertips(1).slipping_element_ids_size(), 199 % 42);
+  EXPECT_EQ(env.decision().slip_detector(), "learned");
 }
 
 TEST(WireAllocation, PlainDecodeDoesAllocateWhichIsWhyTheDecoderExists) {

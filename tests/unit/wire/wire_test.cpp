@@ -350,9 +350,14 @@ TEST(Decision, FillsTheFreshFramesTheirReceiveTimesAndEachFingertipsFlags) {
   out.phase = control::Phase::kLift;
   out.flags.fingertip[1].slip = true;
   out.flags.fingertip[1].touch = true;
-  out.flags.fingertip[1].slipping_elements = 3;
   out.flags.fingertip[1].max_fz_n = 0.4;
   out.flags.fingertip[0].max_fz_n = std::nan("");
+  // The first fill names four slipping elements of each fingertip, the second three of the right.
+  out.flags.fingertip[0].slipping_elements = 4;
+  out.flags.fingertip[0].slipping_ids = {1, 2, 3, 4};
+  out.flags.fingertip[1].slipping_elements = 4;
+  out.flags.fingertip[1].slipping_ids = {9, 8, 7, 6};
+  out.slip_detector = control::SlipDetectorKind::kField;
   Answers on;
   on.add({1, 77, 1'000});
   const std::array<std::int64_t, control::kFingertips> received{5'000, 6'000};
@@ -360,8 +365,14 @@ TEST(Decision, FillsTheFreshFramesTheirReceiveTimesAndEachFingertipsFlags) {
   // Filled twice, the second over the first: storage reused, nothing left of the first.
   on.add({0, 76, 900});
   fill_decision(out, 9'000, on, received, 12, kIds, d);
+  EXPECT_EQ(d.slip_detector(), "field");
   on.count = 1;
+  out.flags.fingertip[0].slipping_elements = 0;
+  out.flags.fingertip[1].slipping_elements = 3;
+  out.flags.fingertip[1].slipping_ids = {40, 2, 17};
+  out.slip_detector = control::SlipDetectorKind::kLearned;
   fill_decision(out, 9'500, on, received, 0, kIds, d);
+  EXPECT_EQ(d.slip_detector(), "learned");
   EXPECT_EQ(d.time_ns(), 9'500);
   ASSERT_EQ(d.answers_size(), 1);
   EXPECT_EQ(d.answers(0).sensor_id(), "right");
@@ -378,6 +389,10 @@ TEST(Decision, FillsTheFreshFramesTheirReceiveTimesAndEachFingertipsFlags) {
   EXPECT_TRUE(d.fingertips(1).touch());
   EXPECT_FALSE(d.fingertips(1).over());
   EXPECT_EQ(d.fingertips(1).slipping_elements(), 3U);
+  EXPECT_EQ(std::vector<std::uint32_t>(d.fingertips(1).slipping_element_ids().begin(),
+                                       d.fingertips(1).slipping_element_ids().end()),
+            (std::vector<std::uint32_t>{40, 2, 17}));
+  EXPECT_EQ(d.fingertips(0).slipping_element_ids_size(), 0);
   EXPECT_DOUBLE_EQ(d.fingertips(1).max_fz_n(), 0.4);
 }
 

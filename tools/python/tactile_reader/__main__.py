@@ -50,6 +50,13 @@ def _line(m, receive_time_ns):
     elif m.kind == "event":
         kinds = m.body.DESCRIPTOR.fields_by_name["kind"].enum_type.values_by_number
         extra = " " + (kinds[m.body.kind].name if m.body.kind in kinds else str(m.body.kind))
+    elif m.kind == "decision":
+        # hand_node's flags, each fingertip's slipping element ids and the detector that decided
+        tips = " ".join(
+            f.sensor_id + ("/SLIP[" + ",".join(str(i) for i in f.slipping_element_ids) + "]"
+                           if f.slip else "")
+            for f in m.body.fingertips)
+        extra = f" {m.body.phase} {m.body.slip_detector or '-'} {tips}"
     return f"{receive_time_ns} {m.topic} {m.kind}{extra}"
 
 

@@ -54,7 +54,7 @@ function makeChart(id, title, unit) {
 const forceChart = typeof Chart === 'undefined' ? null
   : makeChart('force-chart', 'max F_z per fingertip', 'N');
 const slipChart = typeof Chart === 'undefined' ? null
-  : makeChart('slip-chart', 'max displacement per frame (slip when over dr)', 'mm');
+  : makeChart('slip-chart', 'max displacement per frame (grey: dr, the paper rule)', 'mm');
 let t0 = null;
 
 function push(plot, label, x, y, colour) {
@@ -69,6 +69,28 @@ function push(plot, label, x, y, colour) {
 }
 
 function threshold(plot, label, x, y) { push(plot, label, x, y, '#9e9e9e'); }
+
+// One point of the rolling charts: an update, or one of the points tactile_web kept of the
+// updates before this page joined (the 'history' event: same names).
+let chartPoints = 0;
+function plotPoint(p) {
+  if (t0 === null) t0 = p.time_ns;
+  const x = (p.time_ns - t0) / 1e9;
+  for (const f of p.fingertips) {
+    const c = forceChart ? forceChart.colours[f.id] || '#6a1b9a' : '';
+    push(forceChart, f.id, x, f.max_fz_n, c);
+    push(slipChart, f.id, x, f.max_slip_mm, c);
+  }
+  threshold(forceChart, 'F2', x, p.f2_n);
+  threshold(slipChart, 'dr', x, p.dr_mm);
+  ++chartPoints;
+  document.getElementById('side').dataset.chartPoints = String(chartPoints);
+}
+
+function redrawCharts() {
+  if (forceChart) forceChart.chart.update('none');
+  if (slipChart) slipChart.chart.update('none');
+}
 
 function dome(f) {
   let d = domes.get(f.id);
@@ -148,10 +170,12 @@ function colour(ratio) {
 function drawFingertip(f, s) {
   const d = dome(f);
   d.root.dataset.sequence = String(f.sequence);
+  d.root.dataset.decided = f.decided ? '1' : '0';
   setFlag(d.flagEls.TOUCH, f.touch, false);
   setFlag(d.flagEls.SLIP, f.slip, true);
   setFlag(d.flagEls.OVER, f.over, true);
-  d.summary.textContent = 'seq ' + f.sequence + ' \u00b7 ' + fmt(f.fps, 0) + ' fps \u00b7 ' +
+  d.summary.textContent = (f.decided ? '' : 'no decision \u00b7 ') +
+    'seq ' + f.sequence + ' \u00b7 ' + fmt(f.fps, 0) + ' fps \u00b7 ' +
     f.status + (f.lost ? ' \u00b7 lost ' + f.lost : '') +
     (f.age_s > 1 ? ' \u00b7 stale ' + fmt(f.age_s, 0) + ' s' : '') +
     ' \u00b7 max F_z ' + fmt(f.max_fz_n, 2) + ' N \u00b7 max d ' + fmt(f.max_slip_mm, 4) + ' mm';
@@ -208,19 +232,15 @@ function draw(s) {
     }
   }
   document.getElementById('shear-scale').textContent = fmt(shearFullN * 1000, 1) + ' mN';
+  const by = document.getElementById('flags-by');
+  by.textContent = s.flags_label;
+  by.dataset.from = s.flags_from;
+  by.dataset.detector = s.detector;
+  by.className = 'box' + (s.flags_from === 'none' ? ' warn' : '');
   for (const f of s.fingertips) drawFingertip(f, s);
   addEvents(s);
-  if (t0 === null) t0 = s.time_ns;
-  const x = (s.time_ns - t0) / 1e9;
-  for (const f of s.fingertips) {
-    const c = forceChart ? forceChart.colours[f.id] || '#6a1b9a' : '';
-    push(forceChart, f.id, x, f.max_fz_n, c);
-    push(slipChart, f.id, x, f.max_slip_mm, c);
-  }
-  threshold(forceChart, 'F2', x, s.f2_n);
-  threshold(slipChart, 'dr', x, s.dr_mm);
-  if (forceChart) forceChart.chart.update('none');
-  if (slipChart) slipChart.chart.update('none');
+  plotPoint(s);
+  redrawCharts();
   ++received;
   ++windowCount;
   const now = performance.now();
@@ -255,6 +275,11 @@ stream.addEventListener('end', () => {
   status.textContent = 'tactile_web stopped';
   status.className = 'status lost';
   document.body.dataset.ended = '1';
+});
+stream.addEventListener('history', (m) => {
+  if (frozen) return;
+  for (const p of JSON.parse(m.data)) plotPoint(p);
+  redrawCharts();
 });
 stream.onmessage = (m) => {
   if (frozen) return;

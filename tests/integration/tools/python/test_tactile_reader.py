@@ -135,6 +135,17 @@ class TactileReaderTest(unittest.TestCase):
         self.assertTrue(any("frame/left tactile_frame seq 39" in l for l in lines))
 
 
+    def test_a_decision_line_names_the_detector_and_the_slipping_elements(self):
+        from tactile_reader.__main__ import _line
+        from tactile_reader.messages import Message
+
+        d = tactile_pb2.Decision(phase="LIFT", slip_detector="learned")
+        d.fingertips.add(sensor_id="left", slip=True, slipping_elements=2).slipping_element_ids.extend(
+            [4, 17])
+        d.fingertips.add(sensor_id="right")
+        self.assertEqual(_line(Message("decision", "decision", d, b""), 5),
+                         "5 decision decision LIFT learned left/SLIP[4,17] right")
+
     def test_closed_pipe_ends_quietly(self):
         # The reader of the pipe is gone before the first write, as with `| head` on a long log.
         read_end, write_end = os.pipe()

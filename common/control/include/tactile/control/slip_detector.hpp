@@ -27,8 +27,6 @@
 
 namespace tactile::control {
 
-inline constexpr std::size_t kMaxSlipElements = 64;
-
 enum class ElementSlipState : std::uint8_t {
   kNone,       // not in contact, or no displacement measured
   kStick,      // in contact, not slipping

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <span>
 
+#include "tactile/control/config.hpp"
 #include "tactile/geometry.hpp"
 #include "tactile/reading.hpp"
 
@@ -203,6 +204,10 @@ class EventList {
 
 inline constexpr std::int32_t kNoElement = -1;
 
+// Elements of one fingertip the slip detectors decide, and whose ids FingertipFlags names: the
+// sensor has 41; elements beyond this are ignored.
+inline constexpr std::size_t kMaxSlipElements = 64;
+
 // What the flag analyzer found on one fingertip. Element indices are positions in
 // FingertipInput::elements (kNoElement when there is none).
 struct FingertipFlags {
@@ -213,6 +218,9 @@ struct FingertipFlags {
   double max_fz_n = 0;
   std::int32_t slip_max_fz_index = kNoElement;  // largest F_z among the slipping elements
   std::uint32_t slipping_elements = 0;
+  // The ids (ElementReading::id) of the slipping elements in input order: the first
+  // min(slipping_elements, kMaxSlipElements) are set. What the viewers draw as slipping.
+  std::array<std::uint32_t, kMaxSlipElements> slipping_ids{};
   double max_slip_mm = 0;  // largest per-frame displacement magnitude among in-contact elements
 };
 
@@ -229,6 +237,7 @@ struct ControllerOutput {
   Command command;
   EventList events;
   Flags flags;
+  SlipDetectorKind slip_detector = SlipDetectorKind::kPaper;  // the detector that decided SLIP
   Phase phase = Phase::kIdle;
   std::uint32_t twist_cycle = 0;  // 0 before Phase II, then the current cycle from 1
 };

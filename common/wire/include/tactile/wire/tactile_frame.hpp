@@ -46,4 +46,11 @@ struct ReceivedFrame {
 DecodeStatus read_tactile_frame(const v1::TactileFrame& in, const Calibration& cal,
                                 ReceivedFrame& out) noexcept;
 
+// The element readings of a received frame with no calibration to check them against (the
+// viewers): every element as it came, in its order, checked and converted as read_tactile_frame
+// does, except that the centroids stay in mm (x_px, y_px hold mm: no scale is known). A frame
+// that is not COMPLETE gives none. kInvalid when a number is not finite (`out` then unusable).
+// Does not allocate once `out` has the frame's size.
+DecodeStatus read_elements(const v1::TactileFrame& in, std::vector<ElementReading>& out) noexcept;
+
 }  // namespace tactile::wire
