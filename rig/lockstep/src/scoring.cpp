@@ -215,11 +215,14 @@ void RunScorer::add_measurement(std::size_t i, std::uint64_t frame,
       if (!has[k]) continue;
       const control::SlipFeatures x = recorder_->features(i, k);
       const bool label = truth.elements[k].sliding;
-      // moved, departed, surface (in dr) and the load (in mu): the first four signals; the
-      // field rules' reasons (kSlipFeatureReasons), not the compiled-in model's decision, so
-      // the rows do not depend on the model being replaced.
-      const bool easy = !label && x[control::kSlipFeatureReasons] == 0.0f && x[0] < 0.5f &&
-                        x[1] < 0.5f && x[2] < 0.5f && x[3] < 0.5f;
+      // Every length and the load below half their thresholds, and no reason of the field
+      // rules (not the compiled-in model's decision, so the rows do not depend on the model
+      // being replaced).
+      const auto at = [&x](control::SlipSignal s) { return x[control::column(s)]; };
+      const bool easy =
+          !label && at(control::SlipSignal::kFieldReasons) == 0.0f &&
+          at(control::SlipSignal::kMovedDr) < 0.5f && at(control::SlipSignal::kDepartedDr) < 0.5f &&
+          at(control::SlipSignal::kSurfaceDr) < 0.5f && at(control::SlipSignal::kLoad) < 0.5f;
       if (easy && easy_seen_++ % kSlipFeatureEasyStride != 0) continue;
       feature_log_->x.push_back(x);
       feature_log_->label.push_back(label ? 1 : 0);

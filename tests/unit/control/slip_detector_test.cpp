@@ -284,7 +284,8 @@ Config learned_config() {
 }
 
 TEST(LearnedDetector, ATrainedModelIsCompiledIn) {
-  EXPECT_STREQ(kSlipFeatureNames[kSlipFeatureReasons], "field_reasons");
+  EXPECT_STREQ(to_string(SlipSignal::kFieldReasons), "field_reasons");
+  EXPECT_STREQ(kSlipFeatureNames[column(SlipSignal::kShareSlippingPrev)], "share_slipping_prev");
   EXPECT_GT(SlipDetector::model_trees(), 0U) << "slip_model.inc holds no trees: run slip_train";
   EXPECT_EQ(slip_detector_from_string("learned"), SlipDetectorKind::kLearned);
   EXPECT_STREQ(to_string(SlipDetectorKind::kLearned), "learned");
@@ -310,7 +311,7 @@ TEST(LearnedDetector, DecidesEachElementByTheModelsScore) {
       ASSERT_TRUE(det.has_features(0)[i]);
       const SlipFeatures x = det.features(0, i);
       // The field rules' reasons, not the model's: slip_train's rows do not depend on the model.
-      ASSERT_EQ(x[kSlipFeatureReasons], static_cast<float>(rules.reasons[i]))
+      ASSERT_EQ(x[column(SlipSignal::kFieldReasons)], static_cast<float>(rules.reasons[i]))
           << "frame " << frame << " element " << i;
       for (float v : x)
         ASSERT_TRUE(std::isfinite(v));

@@ -10,7 +10,8 @@
 //   estimated online from the loads it has seen break away, and the arm's reported motion that
 //   the contact's shear does not follow. Per element a state (stick, incipient, slip) with a
 //   slip velocity. No friction coefficient is configured.
-// learned: the field detector's signals (kSlipFeatureNames) for each element through a small
+// learned: the field detector's signals (SlipSignal, slip_signals.hpp) for each element through a
+// small
 //   boosted-tree model compiled in (slip_model.inc, written by slip_train from sweeps of seeds
 //   other than the benchmark's): an element slips when the model's score exceeds its decision
 //   level. The history, the friction estimate and the states' gross/incipient split stay the
@@ -23,6 +24,7 @@
 #include <cstdint>
 
 #include "tactile/control/config.hpp"
+#include "tactile/control/slip_signals.hpp"
 #include "tactile/control/types.hpp"
 
 namespace tactile::control {
@@ -71,18 +73,6 @@ inline constexpr std::uint8_t kSlipDragged = 8;
 // The learned detector decided slip where none of the field detector's rules did.
 inline constexpr std::uint8_t kSlipLearned = 16;
 
-// The learned detector's signals for one element of one fresh frame (docs/slip.md, "The learned
-// combiner"): lengths in units of the frame's threshold dr, loads in units of the friction
-// estimate. Only elements in contact with a displacement have them.
-inline constexpr std::size_t kSlipFeatures = 30;
-extern const std::array<const char*, kSlipFeatures> kSlipFeatureNames;
-using SlipFeatures = std::array<float, kSlipFeatures>;
-// The signal that holds the field rules' reasons (kSlip* bits) for the element.
-inline constexpr std::size_t kSlipFeatureReasons = 17;
-
-// The signals of up to kMaxSlipElements elements by column (signal k of element e at [k][e]).
-using SlipColumns = std::array<std::array<float, kMaxSlipElements>, kSlipFeatures>;
-
 // How the model scores a frame's elements: with the processor's vector instructions where it has
 // them (AVX2 on x86-64), or the portable loop. Both give model_score's scores exactly.
 enum class ModelScoring : std::uint8_t { kVector, kPortable };
@@ -100,6 +90,30 @@ struct FingertipSlip {
   double rigid_mm = 0;
   // The friction coefficient estimated so far (field; 0 for paper).
   double mu_estimate = 0;
+};
+
+// What the field detector keeps of an element's last fresh frames.
+struct ElementHistory {
+  bool valid = false;
+  bool sliding = false;  // the field rules' decision
+  double ratio = 0;      // |F_t| / F_n
+  // For the learned detector's signals: the last frame's F_n, its change, and the motion and
+  // departure (in dr) of the last two frames.
+  double fz = 0;
+  double dfz = 0;
+  double moved = 0;
+  double moved2 = 0;
+  double departed = 0;
+};
+
+// The field rules' thresholds (Config's field_* settings, docs/slip.md).
+struct FieldParams {
+  double partial_slip_ratio = 0;  // rho: a load ratio of rho * mu or more is loaded
+  double edge_ratio = 0;          // at the cone's edge from edge * mu
+  double drop_ratio = 0;          // a breakaway: the ratio fell from the edge by drop * mu
+  double min_fz_n = 0;            // F_n below which no load ratio is formed
+  double arm_speed_mps = 0;       // the arm moves above this speed
+  double arm_yaw_rate_rps = 0;    // or this yaw rate
 };
 
 // The paper's test on one reading: in contact, displacement measured, |(dx, dy)| > threshold.
@@ -142,31 +156,22 @@ class SlipDetector {
   static std::size_t model_trees() noexcept;
 
  private:
-  struct History {
-    bool valid = false;
-    bool sliding = false;  // the field detector's decision
-    double ratio = 0;
-    // For the learned detector's signals: the last frame's F_n, its change, and the motion and
-    // departure (in dr) of the last two frames.
-    double fz = 0;
-    double dfz = 0;
-    double moved = 0;
-    double moved2 = 0;
-    double departed = 0;
-  };
   void decide_paper(const FingertipInput& in, double threshold_mm, FingertipSlip& out) noexcept;
+  // The field rules decide each element; the learned detector's signals are written beside them
+  // (kind learned), then decide_learned.
   void decide_field(std::size_t f, const FingertipInput& in, double threshold_mm,
                     const ArmMotion& arm, FingertipSlip& out) noexcept;
+  // The model decides the elements that have signals (the first `count` of the frame);
+  // `contact_moves`: the contact's rigid translation exceeds the threshold.
+  void decide_learned(std::size_t f, std::size_t count, double threshold_mm, bool contact_moves,
+                      FingertipSlip& out) noexcept;
+  // The frame period from the camera's timestamps (0 until two frames came 0-1 s apart).
+  double frame_period_s(std::size_t f, std::int64_t camera_timestamp_ns) noexcept;
 
   SlipDetectorKind kind_;
-  double rho_;
-  double edge_;
-  double drop_;
+  FieldParams field_;
   double mu_initial_;
-  double fn_min_n_;
-  double arm_speed_mps_;
-  double arm_yaw_rps_;
-  std::array<std::array<History, kMaxSlipElements>, kFingertips> history_{};
+  std::array<std::array<ElementHistory, kMaxSlipElements>, kFingertips> history_{};
   // Per fingertip: each estimate depends only on its own fingertip's frames, so the order in which
   // a caller feeds the two fingertips of one instant changes nothing.
   std::array<double, kFingertips> mu_{};
