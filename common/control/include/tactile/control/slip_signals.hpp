@@ -9,11 +9,9 @@
 #include <cstddef>
 #include <cstdint>
 
-namespace tactile::control {
+#include "tactile/control/types.hpp"  // kMaxSlipElements
 
-// The elements of one fingertip a detector decides; beyond them elements are ignored (the sensor
-// has 41).
-inline constexpr std::size_t kMaxSlipElements = 64;
+namespace tactile::control {
 
 enum class SlipSignal : std::uint8_t {
   // The element's own, this frame and the last ones.
