@@ -17,15 +17,12 @@
 // alone receives the same region as the pipeline beside it, so the two are compared like for like.
 // Prints a table, writes OUT/latency.json and OUT/latency.png; progress on standard error.
 #include <arpa/inet.h>
-#include <fcntl.h>
 #include <fmt/format.h>
 #include <netinet/in.h>
 #include <sched.h>
 #include <signal.h>
-#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/time.h>
-#include <sys/wait.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
@@ -61,6 +58,7 @@
 #include "tactile/util/clock.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
+#include "tactile/util/process.hpp"
 #include "tactile/util/realtime.hpp"
 #include "tactile/util/stop.hpp"
 #include "tactile/v1/tactile.pb.h"
@@ -245,96 +243,45 @@ class FifoScheduling {
   bool active_ = false;
 };
 
+// A program the benchmark runs (util::Process): standard input /dev/null, its output appended to
+// `log`, at the normal policy whatever this thread's (IdleScheduling), killed if the benchmark
+// dies; stopped with SIGINT, and SIGKILL after a timeout.
 class Child {
  public:
   Child(std::string name, std::vector<std::string> argv, const fs::path& log)
-      : name_(std::move(name)) {
-    const int log_fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-    const int null_fd = ::open("/dev/null", O_RDWR | O_CLOEXEC);
-    if (log_fd < 0 || null_fd < 0)
-      throw std::runtime_error(
-          fmt::format("cannot open {}: {}", log.string(), std::strerror(errno)));
-    std::vector<char*> args;
-    for (auto& a : argv)
-      args.push_back(a.data());
-    args.push_back(nullptr);
-    const pid_t parent = ::getpid();
-    pid_ = ::fork();
-    if (pid_ < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
-    if (pid_ == 0) {
-      ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // nothing outlives the benchmark
-      if (::getppid() != parent) ::_exit(127);
-      ::dup2(null_fd, 0);
-      ::dup2(log_fd, 1);
-      ::dup2(log_fd, 2);
-      // The programs measured run at the normal policy whatever this thread's (IdleScheduling).
-      const sched_param normal{};
-      if (::sched_setscheduler(0, SCHED_OTHER, &normal) != 0) {
-        const std::string why =
-            fmt::format("benchmark: cannot restore SCHED_OTHER: {}\n", std::strerror(errno));
-        (void)!::write(2, why.data(), why.size());
-        ::_exit(127);
-      }
-      ::execv(args[0], args.data());
-      ::_exit(127);
-    }
-    ::close(log_fd);
-    ::close(null_fd);
-  }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-  ~Child() {
-    if (running()) {
-      ::kill(pid_, SIGKILL);
-      int st = 0;
-      ::waitpid(pid_, &st, 0);
-    }
-  }
+      : name_(std::move(name)), process_(options(std::move(argv), log)) {}
 
   const std::string& name() const { return name_; }
-  pid_t pid() const { return pid_; }
-  bool running() {
-    if (status_) return false;
-    int st = 0;
-    if (::waitpid(pid_, &st, WNOHANG) == pid_) {
-      status_ = st;
-      return false;
-    }
-    return true;
-  }
+  pid_t pid() const { return process_.pid(); }
+  bool running() { return process_.running(); }
   // Exit code once the child has ended by itself, or was stopped `timeout` after the call.
   int wait(milliseconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (running() && std::chrono::steady_clock::now() < deadline)
-      std::this_thread::sleep_for(milliseconds(10));
+    process_.wait_for(timeout);
     return stop(milliseconds(2000));
   }
   // Exit code (128 + signal when killed); SIGINT first, SIGKILL after `timeout`.
   int stop(milliseconds timeout) {
-    if (running()) ::kill(pid_, SIGINT);
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (running() && std::chrono::steady_clock::now() < deadline)
-      std::this_thread::sleep_for(milliseconds(10));
-    if (running()) {
-      progress(
-          fmt::format("{} did not stop within {} ms of SIGINT: killed", name_, timeout.count()));
-      ::kill(pid_, SIGKILL);
-      int st = 0;
-      ::waitpid(pid_, &st, 0);
-      status_ = st;
-    }
-    return exit_code();
+    process_.signal(SIGINT);
+    if (const auto status = process_.wait_for(timeout)) return *status;
+    progress(fmt::format("{} did not stop within {} ms of SIGINT: killed", name_, timeout.count()));
+    return process_.kill();
   }
-  int exit_code() const {
-    if (!status_) return -1;
-    if (WIFEXITED(*status_)) return WEXITSTATUS(*status_);
-    return 128 + WTERMSIG(*status_);
-  }
+  int exit_code() const { return process_.exit_status().value_or(-1); }
 
  private:
+  static util::ProcessOptions options(std::vector<std::string> argv, const fs::path& log) {
+    util::ProcessOptions o;
+    o.argv = std::move(argv);
+    o.stdin_from = util::Redirect::null();
+    o.stdout_to = util::Redirect::append(log);
+    o.stderr_to = util::Redirect::standard_output();
+    o.normal_scheduling = true;
+    o.stop_signal = SIGINT;
+    return o;
+  }
+
   std::string name_;
-  pid_t pid_ = -1;
-  std::optional<int> status_;
+  util::Process process_;
 };
 
 std::string tail_of(const fs::path& log, std::size_t lines = 5) {
