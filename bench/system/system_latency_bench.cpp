@@ -58,6 +58,7 @@
 #include "tactile/util/clock.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
+#include "tactile/util/percentile.hpp"
 #include "tactile/util/process.hpp"
 #include "tactile/util/realtime.hpp"
 #include "tactile/util/stop.hpp"
@@ -108,12 +109,10 @@ void progress(const std::string& line) {
 // ------------------------------------------------------------------------------------------
 // Statistics
 
-// Nearest rank, as the rig's report computes its latency percentiles.
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
-  return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
+// Nearest rank (util/percentile.hpp), as the rig's report computes its latency percentiles; NaN
+// (printed "-") when there are no values.
+double percentile(const std::vector<double>& v, double q) {
+  return util::nearest_rank_percentile(v, q, std::nan(""));
 }
 
 struct Dist {

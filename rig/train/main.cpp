@@ -23,12 +23,14 @@
 #include "tactile/rig/sweep.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
+#include "tactile/util/percentile.hpp"
 #include "tactile/util/stop.hpp"
 
 namespace {
 
 namespace rig = tactile::rig;
 namespace control = tactile::control;
+using tactile::util::nearest_rank_percentile;
 
 struct Run {
   std::uint64_t seed = 0;
@@ -61,15 +63,6 @@ std::vector<std::uint64_t> parse_seeds(const std::string& text) {
     at = comma + 1;
   }
   return seeds;
-}
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const double at = q * static_cast<double>(v.size() - 1);
-  const auto lo = static_cast<std::size_t>(at);
-  const std::size_t hi = std::min(lo + 1, v.size() - 1);
-  return v[lo] + (v[hi] - v[lo]) * (at - static_cast<double>(lo));
 }
 
 }  // namespace
@@ -236,12 +229,12 @@ int main(int argc, char** argv) {
         r.push_back(re);
         f1.push_back(pr + re > 0 ? 2 * pr * re / (pr + re) : 0.0);
       }
-      const double value = percentile(f1, 0.5) + percentile(f1, 0.05);
+      const double value = nearest_rank_percentile(f1, 0.5) + nearest_rank_percentile(f1, 0.05);
       std::fprintf(stderr,
                    "slip_train: decision %+.1f: precision %.3f / %.3f, recall %.3f / %.3f "
                    "(median / 5th percentile over runs)\n",
-                   levels[l], percentile(p, 0.5), percentile(p, 0.05), percentile(r, 0.5),
-                   percentile(r, 0.05));
+                   levels[l], nearest_rank_percentile(p, 0.5), nearest_rank_percentile(p, 0.05),
+                   nearest_rank_percentile(r, 0.5), nearest_rank_percentile(r, 0.05));
       if (value > best) {
         best = value;
         decision = levels[l];
