@@ -11,34 +11,19 @@
 #include <vector>
 
 #include "process.hpp"
+#include "recorded_capture.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using tactile::bench::Captured;
 using tactile::bench::PipelineResult;
-using tactile::bench::Window;
 
-constexpr std::int64_t kT0 = 1'700'000'000'000'000'000;
-constexpr std::int64_t kMs = 1'000'000;
-constexpr double kFps = 100;
-
-const fs::path kCapture = fs::path(TACTILE_TEST_DATA) / "latency" / "capture.tlog";
-
-// Exposures 5..24 (camera timestamps, and the commands sent 1.94 ms after each).
-Window window() {
-  Window w;
-  w.begin_ns = kT0 + 50 * kMs;
-  w.end_ns = kT0 + 250 * kMs - 1;
-  w.all_running = true;
-  return w;
-}
+using tactile::bench::testing::kT0;
+const fs::path kCapture = tactile::bench::testing::recorded_capture();
 
 PipelineResult analysed() {
-  PipelineResult r;
-  r.fps = kFps;
-  tactile::bench::analyse_capture(tactile::bench::read_capture(kCapture), window(), kFps, r);
-  return r;
+  return tactile::bench::testing::recorded_analysis();
 }
 
 TEST(LatencyCapture, ReadsEveryRecordedMessage) {
