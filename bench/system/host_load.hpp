@@ -27,6 +27,7 @@ double io_full_stall_ms();
 // over all CPUs: a virtual machine not scheduled by its host stalls every process at once.
 double steal_ms();
 
+// utime + stime of a process (all its threads), in seconds, and its major page faults.
 struct ProcStat {
   double cpu_s = std::nan("");  // utime + stime, all threads
   double major_faults = std::nan("");
