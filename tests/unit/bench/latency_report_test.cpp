@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -12,6 +14,7 @@
 
 namespace {
 
+namespace fs = std::filesystem;
 using tactile::bench::json;
 using tactile::bench::RateResult;
 using tactile::bench::Settings;
@@ -84,6 +87,24 @@ TEST(LatencyReport, AFramesGvspPacketsAtThePacketSize) {
   // 1500-byte packets carry 1464 image bytes; a leader and a trailer of 84 bytes each.
   EXPECT_EQ(tactile::bench::gvsp_frame_packets(3000, 1500),
             (std::vector<std::size_t>{84, 1500, 1500, 108, 84}));
+}
+
+// A real run's capture (tests/data/latency/run-100fps.tlog, kept by the benchmark) gives, analysed
+// again, every capture-derived figure its run reported in latency.json (run-100fps.json).
+TEST(LatencyReport, ARealRunsCaptureGivesTheFiguresItsRunReported) {
+  const fs::path dir = fs::path(TACTILE_TEST_DATA) / "latency";
+  const json expected = json::parse(std::ifstream(dir / "run-100fps.json"));
+  tactile::bench::Window w;
+  w.begin_ns = expected.at("window_begin_ns").get<std::int64_t>();
+  w.end_ns = expected.at("window_end_ns").get<std::int64_t>();
+  RateResult rr;
+  rr.pipe.fps = expected.at("fps").get<double>();
+  tactile::bench::analyse_capture(tactile::bench::read_capture(dir / "run-100fps.tlog"), w,
+                                  rr.pipe.fps, rr.pipe);
+  const json j = tactile::bench::result_json(rr);
+  ASSERT_GT(expected.at("figures").size(), 10U);
+  for (const auto& [key, figure] : expected.at("figures").items())
+    EXPECT_EQ(j.at(key), figure) << key;
 }
 
 }  // namespace
