@@ -29,6 +29,7 @@
 #include "tactile/cli/run.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/log.hpp"
+#include "tactile/util/percentile.hpp"
 
 namespace tactile::camera {
 namespace {
@@ -82,13 +83,6 @@ ThreadTimes thread_times(const std::vector<pid_t>& camera_threads) {
   }
   closedir(dir);
   return t;
-}
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const auto index = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5);
-  return v[std::min(index, v.size() - 1)];
 }
 
 struct Row {
@@ -229,10 +223,11 @@ int run(const Settings& s) {
           static_cast<double>(r.samples.frames + r.samples.lost) / (s.seconds * r.cameras),
           static_cast<unsigned long long>(r.samples.frames),
           static_cast<unsigned long long>(r.samples.complete),
-          static_cast<unsigned long long>(r.samples.lost), percentile(d, 0.5), percentile(d, 0.99),
-          d.empty() ? 0.0 : *std::max_element(d.begin(), d.end()), percentile(w, 0.5),
-          percentile(w, 0.99), w.empty() ? 0.0 : *std::max_element(w.begin(), w.end()),
-          r.receiver_cpu, r.camera_cpu);
+          static_cast<unsigned long long>(r.samples.lost), util::nearest_rank_percentile(d, 0.5),
+          util::nearest_rank_percentile(d, 0.99),
+          d.empty() ? 0.0 : *std::max_element(d.begin(), d.end()),
+          util::nearest_rank_percentile(w, 0.5), util::nearest_rank_percentile(w, 0.99),
+          w.empty() ? 0.0 : *std::max_element(w.begin(), w.end()), r.receiver_cpu, r.camera_cpu);
       std::fflush(stdout);
     }
   }

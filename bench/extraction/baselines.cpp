@@ -3,14 +3,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-// Same multiversioning as the core's kernels (common/tactile/src/kernels.cpp), so that the
-// floor gets every advantage the measurement gets.
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && \
-    !defined(TACTILE_NO_MULTIVERSION)
-#define TACTILE_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define TACTILE_CLONES
-#endif
+#include "tactile/detail/multiversion.hpp"
 
 namespace tactile::bench {
 
@@ -95,6 +88,7 @@ template <typename Pixel>
   }
 }
 
+// Cloned as the core's kernels are, so that the floor gets every advantage the measurement gets.
 TACTILE_CLONES
 void sum_u8(const DiskRow* rows, const std::uint32_t* ends, std::size_t elements,
             const ImageView& f, std::uint64_t* sums) noexcept {

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "baselines.hpp"
+#include "tactile/util/percentile.hpp"
 
 namespace tactile::bench {
 namespace {
@@ -475,13 +476,6 @@ std::vector<std::string> names(const SlipScene& sc) {
   return n;
 }
 
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())) - 1);
-  return v[std::min(i, v.size() - 1)];
-}
-
 }  // namespace
 
 std::vector<FalseSlipRow> run_false_slips(const std::vector<Method>& methods, double noise_sigma,
@@ -613,9 +607,9 @@ std::vector<DelayRow> run_delays(const std::vector<Method>& methods, double spee
   for (std::size_t k = 0; k < n.size(); ++k) {
     rows[k].method = n[k];
     rows[k].speed_dr = speed_dr;
-    rows[k].p50 = quantile(delays[k], 0.5);
-    rows[k].p99 = quantile(delays[k], 0.99);
-    rows[k].max = quantile(delays[k], 1.0);
+    rows[k].p50 = util::nearest_rank_percentile(delays[k], 0.5);
+    rows[k].p99 = util::nearest_rank_percentile(delays[k], 0.99);
+    rows[k].max = util::nearest_rank_percentile(delays[k], 1.0);
   }
   return rows;
 }

@@ -1,7 +1,11 @@
 // rig: the simulated rig (docs/rig.md). `rig --lockstep --scenario FILE --report FILE.json` runs
 // the scenario in one process on simulated time; `rig --scenario FILE` runs it in real time with
 // fake GigE Vision cameras and the arm controller, for sensor_node and hand_node.
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -68,12 +72,13 @@ int run(int argc, char** argv) {
       ->check(CLI::Range(1e-7, 1e-3));
   tactile::cli::add_log_level(app, log_level);
   tactile::rig::RealtimeOptions rt;
-  std::string cameras;
+  std::vector<std::string> cameras;
   std::string write_configs;
   std::vector<std::string> observe_frames;
   app.add_option(
-      "--cameras", cameras,
-      "real time: the two cameras' IPv4 addresses, left,right (default 127.0.0.2,127.0.0.3)");
+         "--cameras", cameras,
+         "real time: the two cameras' IPv4 addresses, left,right (default 127.0.0.2,127.0.0.3)")
+      ->delimiter(',');
   app.add_option("--camera-netns", rt.camera_netns,
                  "real time: serve the cameras inside this network namespace (a name `ip netns "
                  "add` made, or a path such as /proc/PID/ns/net): behind a link of their own, "
@@ -143,10 +148,11 @@ int run(int argc, char** argv) {
       "--slip-detector", slip_detector,
       "the controller's slip detector, paper, field or learned, overriding the scenario's "
       "controller.slip_detector (docs/slip.md)");
-  std::string detectors = "paper,field,learned";
-  app.add_option("--detectors", detectors,
-                 "sweep: run every scenario once with each of these slip detectors")
-      ->capture_default_str();
+  app.add_option("--detectors", sweep.detectors,
+                 "sweep: run every scenario once with each of these slip detectors, separated by "
+                 "commas")
+      ->delimiter(',')
+      ->default_str("paper,field,learned");
   app.add_option("--seed", sweep.seed, "sweep: the draw's seed")->capture_default_str();
   app.add_option("--out", sweep.out, "sweep, sweep-merge: the output directory");
   app.add_option("--jobs", sweep.jobs, "sweep: child processes at a time (default: the cores)")
@@ -189,20 +195,14 @@ int run(int argc, char** argv) {
       }
       if (!slip_detector.empty())
         throw tactile::cli::UsageError("--sweep takes --detectors, not --slip-detector");
-      sweep.detectors.clear();
-      for (std::size_t at = 0; at <= detectors.size();) {
-        const std::size_t comma = std::min(detectors.find(',', at), detectors.size());
-        const std::string name = detectors.substr(at, comma - at);
-        if (!tactile::control::slip_detector_from_string(name) ||
-            std::find(sweep.detectors.begin(), sweep.detectors.end(), name) !=
-                sweep.detectors.end()) {
+      for (auto it = sweep.detectors.begin(); it != sweep.detectors.end(); ++it) {
+        if (!tactile::control::slip_detector_from_string(*it) ||
+            std::find(sweep.detectors.begin(), it, *it) != it) {
           throw tactile::cli::UsageError("--detectors must list detectors (" +
                                          std::string(tactile::control::kSlipDetectorNames) +
-                                         "), each once, separated by commas; got '" + detectors +
-                                         "'");
+                                         "), each once, separated by commas; got '" +
+                                         fmt::format("{}", fmt::join(sweep.detectors, ",")) + "'");
         }
-        sweep.detectors.push_back(name);
-        at = comma + 1;
       }
       tactile::util::install_stop_handlers();
       tactile::rig::sweep::run_sweep(sweep);
@@ -217,12 +217,11 @@ int run(int argc, char** argv) {
     tactile::rig::Scenario scenario = tactile::rig::load_scenario(scenario_path);
     if (!slip_detector.empty()) scenario.slip_detector = slip_detector;
     if (!cameras.empty()) {
-      const auto comma = cameras.find(',');
-      if (comma == std::string::npos) {
+      if (cameras.size() != 2) {
         throw tactile::cli::UsageError("--cameras needs two addresses, left,right; got '" +
-                                       cameras + "'");
+                                       fmt::format("{}", fmt::join(cameras, ",")) + "'");
       }
-      rt.camera_addresses = {cameras.substr(0, comma), cameras.substr(comma + 1)};
+      rt.camera_addresses = {cameras[0], cameras[1]};
     }
     if (!observe_frames.empty()) rt.observe_frames = observe_frames;
     if (!arm_key.empty()) {

@@ -4,6 +4,7 @@
 // fits gradient-boosted oblivious trees and writes the model as C++ source (slip_model.inc).
 // Deterministic: the same seeds and options give the same file, whatever --jobs.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -23,12 +24,14 @@
 #include "tactile/rig/sweep.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
+#include "tactile/util/percentile.hpp"
 #include "tactile/util/stop.hpp"
 
 namespace {
 
 namespace rig = tactile::rig;
 namespace control = tactile::control;
+using tactile::util::nearest_rank_percentile;
 
 struct Run {
   std::uint64_t seed = 0;
@@ -42,42 +45,12 @@ struct Tally {
   std::vector<double> tp, fp, fn;
 };
 
-std::vector<std::uint64_t> parse_seeds(const std::string& text) {
-  std::vector<std::uint64_t> seeds;
-  for (std::size_t at = 0; at <= text.size();) {
-    const std::size_t comma = std::min(text.find(',', at), text.size());
-    const std::string item = text.substr(at, comma - at);
-    std::size_t used = 0;
-    std::uint64_t v = 0;
-    try {
-      v = std::stoull(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (item.empty() || used != item.size())
-      throw tactile::cli::UsageError("--seeds must be whole numbers separated by commas; got '" +
-                                     text + "'");
-    seeds.push_back(v);
-    at = comma + 1;
-  }
-  return seeds;
-}
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const double at = q * static_cast<double>(v.size() - 1);
-  const auto lo = static_cast<std::size_t>(at);
-  const std::size_t hi = std::min(lo + 1, v.size() - 1);
-  return v[lo] + (v[hi] - v[lo]) * (at - static_cast<double>(lo));
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   tactile::util::set_program_name("slip_train");
   // The defaults make the model in the repository.
-  std::string seeds_text = "101,102,103,104";
+  std::vector<std::uint64_t> seeds{101, 102, 103, 104};
   std::uint64_t scenarios = 80;
   unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
   std::string out = "common/control/src/slip_model.inc";
@@ -96,8 +69,17 @@ int main(int argc, char** argv) {
       "fits boosted oblivious trees and writes the model as C++ source to --out, which\n"
       "common/control/src/slip_detector.cpp includes; rebuild to use it. Never train on the\n"
       "seeds the benchmark sweep is scored on."};
-  app.add_option("--seeds", seeds_text, "training sweep seeds, separated by commas")
-      ->capture_default_str();
+  app.add_option("--seeds", seeds, "training sweep seeds, separated by commas")
+      ->delimiter(',')
+      ->check(CLI::Validator(
+          [](const std::string& seed) {
+            // Each item; CLI11 would read "" as 0.
+            return !seed.empty() && seed.find_first_not_of("0123456789") == std::string::npos
+                       ? std::string()
+                       : "whole numbers separated by commas; got '" + seed + "'";
+          },
+          ""))
+      ->default_str("101,102,103,104");
   app.add_option("--scenarios", scenarios, "scenarios per seed")
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{100000}))
       ->capture_default_str();
@@ -129,7 +111,6 @@ int main(int argc, char** argv) {
   tactile::cli::add_log_level(app, log_level);
   return tactile::cli::run(app, argc, argv, [&] {
     tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
-    const std::vector<std::uint64_t> seeds = parse_seeds(seeds_text);
     tactile::util::install_stop_handlers();
 
     std::vector<Run> runs;
@@ -236,12 +217,12 @@ int main(int argc, char** argv) {
         r.push_back(re);
         f1.push_back(pr + re > 0 ? 2 * pr * re / (pr + re) : 0.0);
       }
-      const double value = percentile(f1, 0.5) + percentile(f1, 0.05);
+      const double value = nearest_rank_percentile(f1, 0.5) + nearest_rank_percentile(f1, 0.05);
       std::fprintf(stderr,
                    "slip_train: decision %+.1f: precision %.3f / %.3f, recall %.3f / %.3f "
                    "(median / 5th percentile over runs)\n",
-                   levels[l], percentile(p, 0.5), percentile(p, 0.05), percentile(r, 0.5),
-                   percentile(r, 0.05));
+                   levels[l], nearest_rank_percentile(p, 0.5), nearest_rank_percentile(p, 0.05),
+                   nearest_rank_percentile(r, 0.5), nearest_rank_percentile(r, 0.05));
       if (value > best) {
         best = value;
         decision = levels[l];
@@ -255,7 +236,7 @@ int main(int argc, char** argv) {
     const std::string training = fmt::format(
         "slip_train --seeds {} --scenarios {} --trees {} --depth {} --learning-rate {}{}{}{}: {} "
         "rows, decision {:.2f}",
-        seeds_text, scenarios, params.trees, params.depth, params.learning_rate,
+        fmt::join(seeds, ","), scenarios, params.trees, params.depth, params.learning_rate,
         controller != "field" ? fmt::format(" --controller {}", controller) : std::string(),
         max_time_s > 0 ? fmt::format(" --max-time {}", max_time_s) : std::string(),
         decision_level ? fmt::format(" --decision {}", *decision_level) : std::string(),

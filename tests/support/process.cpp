@@ -1,10 +1,7 @@
 #include "process.hpp"
 
-#include <fcntl.h>
 #include <sched.h>
-#include <signal.h>
 #include <sys/mman.h>
-#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -15,9 +12,6 @@
 #include <iterator>
 #include <sstream>
 #include <stdexcept>
-#include <thread>
-
-extern char** environ;
 
 namespace tactile::testing {
 namespace {
@@ -41,88 +35,35 @@ std::filesystem::path make_temp_dir(const char* prefix) {
 
 Process::Process(std::vector<std::string> argv, std::vector<std::string> extra_env)
     : dir_(make_temp_dir("tactile-proc-")) {
-  const std::string out = (dir_ / "out").string();
-  const std::string err = (dir_ / "err").string();
-  // Everything the child needs is prepared before fork: after it, only async-signal-safe calls.
-  const int null_fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
-  const int out_fd = ::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  const int err_fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (null_fd < 0 || out_fd < 0 || err_fd < 0)
-    throw std::runtime_error("cannot open the output files");
-  std::vector<char*> args;
-  for (auto& a : argv)
-    args.push_back(a.data());
-  args.push_back(nullptr);
-  std::vector<std::string> env_store;
-  for (char** e = environ; *e != nullptr; ++e)
-    env_store.emplace_back(*e);
-  for (auto& e : extra_env)
-    env_store.push_back(e);
-  std::vector<char*> env;
-  for (auto& e : env_store)
-    env.push_back(e.data());
-  env.push_back(nullptr);
-  const pid_t parent = ::getpid();
-  pid_ = ::fork();
-  if (pid_ < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
-  if (pid_ == 0) {
-    // A test that dies takes its programs with it.
-    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
-    if (::getppid() != parent) ::_exit(127);
-    ::dup2(null_fd, 0);
-    ::dup2(out_fd, 1);
-    ::dup2(err_fd, 2);
-    ::execvpe(args[0], args.data(), env.data());
-    ::_exit(127);
+  util::ProcessOptions o;
+  o.argv = std::move(argv);
+  o.extra_env = std::move(extra_env);
+  o.stdin_from = util::Redirect::null();
+  o.stdout_to = util::Redirect::file(dir_ / "out");
+  o.stderr_to = util::Redirect::file(dir_ / "err");
+  try {
+    process_.emplace(std::move(o));
+  } catch (...) {
+    std::error_code ec;
+    std::filesystem::remove_all(dir_, ec);
+    throw;
   }
-  ::close(null_fd);
-  ::close(out_fd);
-  ::close(err_fd);
 }
 
 Process::~Process() {
-  if (running()) {
-    ::kill(pid_, SIGKILL);
-    int st = 0;
-    ::waitpid(pid_, &st, 0);
-  }
+  process_.reset();  // kills (SIGKILL) a process still running
   std::error_code ec;
   std::filesystem::remove_all(dir_, ec);
 }
 
-bool Process::running() {
-  if (status_) return false;
-  int st = 0;
-  const pid_t r = ::waitpid(pid_, &st, WNOHANG);
-  if (r == pid_) {
-    status_ = st;
-    return false;
-  }
-  return r == 0;
-}
-
-void Process::signal(int sig) {
-  if (running()) ::kill(pid_, sig);
-}
-
 ProcessResult Process::wait(std::chrono::milliseconds timeout) {
   ProcessResult r;
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (running()) {
-    if (std::chrono::steady_clock::now() > deadline) {
-      ::kill(pid_, SIGKILL);
-      int st = 0;
-      ::waitpid(pid_, &st, 0);
-      status_ = st;
-      r.timed_out = true;
-      break;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  std::optional<int> status = process_->wait_for(timeout);
+  if (!status) {
+    status = process_->kill();
+    r.timed_out = true;
   }
-  if (status_) {
-    if (WIFEXITED(*status_)) r.exit_code = WEXITSTATUS(*status_);
-    if (WIFSIGNALED(*status_)) r.exit_code = 128 + WTERMSIG(*status_);
-  }
+  r.exit_code = *status;
   r.out = out_so_far();
   r.err = err_so_far();
   return r;

@@ -1,7 +1,7 @@
 #pragma once
 
-// Runs real programs from tests: arguments as given, standard output and error captured to
-// files, a deadline on every wait, and the process killed if a test ends early.
+// Runs real programs from tests (with util::Process): arguments as given, standard output and
+// error captured to files, a deadline on every wait, and the process killed if a test ends early.
 #include <sys/types.h>
 
 #include <chrono>
@@ -9,6 +9,8 @@
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "tactile/util/process.hpp"
 
 namespace tactile::testing {
 
@@ -22,15 +24,16 @@ struct ProcessResult {
 class Process {
  public:
   // Starts argv[0] (looked up in PATH when it has no slash) with the arguments. Standard input is
-  // /dev/null. The child is killed (SIGKILL) if the test process dies first.
+  // /dev/null. The child is killed (SIGKILL) if the test process dies first. Throws
+  // std::runtime_error when the program cannot start.
   explicit Process(std::vector<std::string> argv, std::vector<std::string> extra_env = {});
   ~Process();  // kills (SIGKILL) a process still running
   Process(const Process&) = delete;
   Process& operator=(const Process&) = delete;
 
-  pid_t pid() const { return pid_; }
-  bool running();
-  void signal(int sig);
+  pid_t pid() const { return process_->pid(); }
+  bool running() { return process_->running(); }
+  void signal(int sig) { process_->signal(sig); }
   // Waits until exit or the deadline; on timeout kills the process and says so.
   ProcessResult wait(std::chrono::milliseconds timeout);
   // What the process wrote so far.
@@ -38,9 +41,8 @@ class Process {
   std::string err_so_far() const;
 
  private:
-  pid_t pid_ = -1;
-  std::optional<int> status_;
-  std::filesystem::path dir_;
+  std::filesystem::path dir_;  // before process_: the files outlive the process
+  std::optional<util::Process> process_;
 };
 
 // Runs to completion (bounded).

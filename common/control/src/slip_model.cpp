@@ -2,8 +2,9 @@
 #include <cstdint>
 
 #include "tactile/control/slip_detector.hpp"
+#include "tactile/detail/multiversion.hpp"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#ifdef TACTILE_AVX2
 #include <immintrin.h>
 #endif
 
@@ -43,8 +44,7 @@ void score_portable(const SlipColumns& columns, std::size_t n, float* score) noe
   }
 }
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define TACTILE_AVX2 __attribute__((target("avx2")))
+#ifdef TACTILE_AVX2
 
 constexpr std::size_t kSplits = kSlipModel.trees * kSlipModel.depth;
 // Trees whose leaf indices the AVX2 scoring holds at once (4 KB).
@@ -216,9 +216,8 @@ TACTILE_AVX2 void score_avx2(const SlipColumns& columns, std::size_t n, float* s
 using ScoreFn = void (*)(const SlipColumns&, std::size_t, float*) noexcept;
 
 ScoreFn vector_scoring() noexcept {
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-  __builtin_cpu_init();
-  if (__builtin_cpu_supports("avx2")) return score_avx2;
+#ifdef TACTILE_AVX2
+  if (tactile::detail::cpu_has_avx2_fma()) return score_avx2;
 #endif
   return nullptr;
 }

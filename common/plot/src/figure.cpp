@@ -13,6 +13,7 @@
 
 #include "tactile/plot/ticks.hpp"
 #include "tactile/util/files.hpp"
+#include "tactile/util/percentile.hpp"
 
 namespace tactile::plot {
 namespace {
@@ -877,13 +878,8 @@ std::optional<std::pair<double, double>> robust_range(std::span<const double> va
     if (std::isfinite(x)) v.push_back(x);
   if (v.empty()) return std::nullopt;
   std::sort(v.begin(), v.end());
-  // Nearest rank: the smallest value with at least q of the values at or below it.
-  const auto rank = [&](double q) {
-    const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
-    return v[std::clamp<std::size_t>(k, 1, v.size()) - 1];
-  };
-  const double lo = r.lo_quantile == 0 ? v.front() : rank(r.lo_quantile);
-  const double hi = rank(r.hi_quantile);
+  const double lo = r.lo_quantile == 0 ? v.front() : util::nearest_rank_of_sorted(v, r.lo_quantile);
+  const double hi = util::nearest_rank_of_sorted(v, r.hi_quantile);
   const double pad = r.margin * (hi - lo);
   return std::pair{lo - pad, hi + pad};
 }

@@ -3,19 +3,15 @@
 #include <algorithm>
 #include <cstring>
 
+#include "tactile/detail/multiversion.hpp"
+
 // The portable kernels. Each exported function is cloned for x86-64-v3 (AVX2, FMA) beside the
 // baseline build; the dynamic loader picks the clone once (ifunc). The fast paths use the
 // compiler's generic vector types (GCC and Clang), which it lowers to whatever the clone's
 // instruction set has: 16-byte SSE2 registers in the baseline, AVX2 in the other clone, other
 // SIMD on other targets. Blocks that do not fit a fast path (16-bit pixels in the integer
 // passes, odd widths, huge disks) go through plain loops. Builds that define
-// TACTILE_NO_MULTIVERSION get the baseline only.
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && \
-    !defined(TACTILE_NO_MULTIVERSION)
-#define TACTILE_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define TACTILE_CLONES
-#endif
+// TACTILE_NO_MULTIVERSION get the baseline only (tactile/detail/multiversion.hpp).
 
 namespace tactile::detail {
 namespace {

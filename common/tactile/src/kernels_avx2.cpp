@@ -6,14 +6,12 @@
 // instructions; sums of s * column are byte multiply-adds (column < 32 within a group of 32,
 // the group's start added through the group's sum of s). Everything is exact.
 #include "kernels.hpp"
+#include "tactile/detail/multiversion.hpp"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#ifdef TACTILE_AVX2
 #include <immintrin.h>
 
 #include <algorithm>
-
-#define TACTILE_AVX2 __attribute__((target("avx2,fma")))
-#define TACTILE_AVX2_INLINE __attribute__((target("avx2,fma"), always_inline)) inline
 
 namespace tactile::detail {
 namespace {
@@ -373,7 +371,7 @@ const KernelSet* avx2_kernels() noexcept {
                               portable_kernels().moments_u16,
                               gauss_u8,
                               portable_kernels().gauss_u16};
-  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") ? &kSet : nullptr;
+  return cpu_has_avx2_fma() ? &kSet : nullptr;
 }
 
 }  // namespace tactile::detail

@@ -16,6 +16,7 @@
 #include "tactile/rig/scoring.hpp"
 #include "tactile/rig/sensors.hpp"
 #include "tactile/rig/world.hpp"
+#include "tactile/util/percentile.hpp"
 
 namespace tactile::rig {
 namespace {
@@ -25,13 +26,6 @@ double ratio(std::uint64_t part, std::uint64_t rest) {
 }
 
 }  // namespace
-
-double nearest_rank_percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
-  return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
-}
 
 void SlipScorer::add(std::size_t i, std::size_t k, std::uint64_t frame, bool predicted, bool ideal,
                      const ElementTruth& et, double thr) {

@@ -1,17 +1,12 @@
 // Running a sweep: one child rig process per scenario, J at a time (docs/slip.md, "The sweep").
-#include <fcntl.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
-#include <cstring>
+#include <list>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -20,10 +15,9 @@
 #include "tactile/rig/sweep.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
+#include "tactile/util/process.hpp"
 #include "tactile/util/stop.hpp"
 #include "tactile/util/text.hpp"
-
-extern char** environ;
 
 namespace tactile::rig::sweep {
 namespace {
@@ -72,34 +66,23 @@ struct Job {
 };
 
 // Starts PROGRAM --lockstep --scenario FILE --report FILE --slip-detector NAME in its own
-// process group (a Ctrl-C at
-// the terminal reaches the sweep alone, which stops its children), stdout to /dev/null, stderr to
-// the scenario's log.
-pid_t spawn_child(const std::string& program, const Paths& p, const std::string& detector) {
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 2, p.log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawnattr_t attr;
-  posix_spawnattr_init(&attr);
-  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
-  posix_spawnattr_setpgroup(&attr, 0);
-  std::vector<std::string> args{
-      program,    "--lockstep",      "--scenario",      p.scenario.string(),
-      "--report", p.report.string(), "--slip-detector", detector};
-  std::vector<char*> argv;
-  for (std::string& a : args)
-    argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, program.c_str(), &actions, &attr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  posix_spawnattr_destroy(&attr);
-  if (rc != 0) {
-    throw std::runtime_error(fmt::format("cannot start {}: {}", program, std::strerror(rc)));
-  }
-  return pid;
+// process group (a Ctrl-C at the terminal reaches the sweep alone, which stops its children),
+// stdout to /dev/null, stderr to the scenario's log. Throws when it cannot start.
+util::Process spawn_child(const std::string& program, const Paths& p, const std::string& detector) {
+  util::ProcessOptions o;
+  o.argv = {program,    "--lockstep",      "--scenario",      p.scenario.string(),
+            "--report", p.report.string(), "--slip-detector", detector};
+  o.stdout_to = util::Redirect::null();
+  o.stderr_to = util::Redirect::file(p.log);
+  o.own_process_group = true;
+  o.die_with_parent = false;  // as before util::Process: a sweep's runs finish their reports
+  return util::Process(std::move(o));
 }
+
+struct Running {
+  Job job;
+  util::Process process;
+};
 
 void write_outputs(const std::vector<Row>& rows, const SweepInfo& info, const fs::path& out) {
   util::write_file_atomic(out / "sweep.json", info_json(info));
@@ -157,23 +140,23 @@ std::size_t run_sweep(const SweepOptions& o) {
       queue.size(), jobs);
   const auto start = std::chrono::steady_clock::now();
   std::vector<Row> rows;
-  std::map<pid_t, Job> running;
+  std::list<Running> running;
   std::size_t next = 0;
   std::size_t done = 0;
   bool stopped = false;
-  while (next < queue.size() || !running.empty()) {
+  while ((!stopped && next < queue.size()) || !running.empty()) {
     if (util::stop_requested() && !stopped) {
       stopped = true;
       util::log_warn("sweep: stopping {} running scenarios", running.size());
-      for (const auto& [pid, index] : running)
-        ::kill(pid, SIGTERM);
+      for (Running& r : running)
+        r.process.signal(SIGTERM);
     }
     while (!stopped && next < queue.size() && static_cast<int>(running.size()) < jobs) {
       const Job job = queue[next++];
       const std::uint64_t i = job.index;
       try {
-        running[spawn_child(program, paths_of(o.out, i, o.scenarios, job.detector), job.detector)] =
-            job;
+        running.push_back({job, spawn_child(program, paths_of(o.out, i, o.scenarios, job.detector),
+                                            job.detector)});
       } catch (const std::exception& e) {
         // 127: the shell's "cannot run"
         rows.push_back(failed_row(draws[i], job.detector, 127, e.what()));
@@ -181,21 +164,18 @@ std::size_t run_sweep(const SweepOptions& o) {
         ++done;
       }
     }
-    int status = 0;
-    const pid_t pid = ::waitpid(-1, &status, WNOHANG);
-    if (pid <= 0) {
-      if (pid < 0 && errno == ECHILD) break;
+    const auto ended = std::find_if(running.begin(), running.end(),
+                                    [](Running& r) { return !r.process.running(); });
+    if (ended == running.end()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       continue;
     }
-    const auto it = running.find(pid);
-    if (it == running.end()) continue;
-    const Job job = it->second;
+    const Job job = ended->job;
+    const int code = ended->process.exit_status().value_or(-1);
     const std::uint64_t i = job.index;
-    running.erase(it);
+    running.erase(ended);
     if (stopped) continue;  // cut short by the stop: not a result
     const Paths p = paths_of(o.out, i, o.scenarios, job.detector);
-    const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     if (code == 0) {
       try {
         for (Row& r : rows_from_report(draws[i], util::read_file(p.report)))

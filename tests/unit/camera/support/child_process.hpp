@@ -1,8 +1,8 @@
 #pragma once
 
-// A child process for tests: started with its output captured, killed (SIGKILL) and reaped
-// when the object goes, and killed by the kernel if the test process dies first
-// (PR_SET_PDEATHSIG), so no test leaves a process behind.
+// A child process for tests (util::Process): started with its output captured, killed
+// (SIGKILL) and reaped when the object goes, and killed by the kernel if the test process dies
+// first (PR_SET_PDEATHSIG), so no test leaves a process behind.
 #include <sys/types.h>
 
 #include <chrono>
@@ -10,33 +10,32 @@
 #include <string>
 #include <vector>
 
+#include "tactile/util/process.hpp"
+
 namespace tactile::camera::testing {
 
 class ChildProcess {
  public:
   // argv[0] is looked up in PATH. Throws std::runtime_error when it is not found or cannot start.
   explicit ChildProcess(std::vector<std::string> argv);
-  ~ChildProcess();
-  ChildProcess(const ChildProcess&) = delete;
-  ChildProcess& operator=(const ChildProcess&) = delete;
 
   // Waits for the exit within `timeout`, reading its output meanwhile. The exit status, or
   // nothing when it still runs (the caller then stops it).
-  std::optional<int> wait_exit(std::chrono::milliseconds timeout);
+  std::optional<int> wait_exit(std::chrono::milliseconds timeout) {
+    return process_.wait_for(timeout);
+  }
   // SIGTERM, then SIGKILL when it has not exited within `grace`. Returns the exit status
   // (128 + signal number for a signal).
-  int stop(std::chrono::milliseconds grace = std::chrono::milliseconds(2000));
-  bool running();
+  int stop(std::chrono::milliseconds grace = std::chrono::milliseconds(2000)) {
+    return process_.stop(grace);
+  }
+  bool running() { return process_.running(); }
   // Standard output and error, interleaved, as read so far.
-  const std::string& output();
-  pid_t pid() const { return pid_; }
+  const std::string& output() { return process_.output(); }
+  pid_t pid() const { return process_.pid(); }
 
  private:
-  void read_available(int timeout_ms);
-  pid_t pid_ = -1;
-  int output_fd_ = -1;
-  std::optional<int> status_;
-  std::string output_;
+  util::Process process_;
 };
 
 // Runs a program to its end within `timeout` (killing it otherwise); returns exit status and

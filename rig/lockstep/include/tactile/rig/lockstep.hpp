@@ -14,6 +14,7 @@
 #include "tactile/control/slip_detector.hpp"
 #include "tactile/rig/scenario.hpp"
 #include "tactile/rig/truth.hpp"
+#include "tactile/util/percentile.hpp"
 
 namespace tactile::rig {
 
@@ -53,9 +54,9 @@ struct SlipMetrics {
 // Latency given to an onset that no SLIP covered within its episode and two frames after.
 inline constexpr double kMissedLatencyFrames = 1000.0;
 
-// The q-quantile of `v` by nearest rank, 0 when empty: every percentile of the report (slip
-// latency in frames, and latency_ms of a real-time run).
-double nearest_rank_percentile(std::vector<double> v, double q);
+// The q-quantile of `v` by nearest rank (util/percentile.hpp), 0 when empty: every percentile of
+// the report (slip latency in frames, and latency_ms of a real-time run).
+using util::nearest_rank_percentile;
 
 // The element-frame slip score of a run against its truth (SlipMetrics), the same for the
 // lockstep and the real-time runs: the measurement's test, the onsets and their latency, and the
