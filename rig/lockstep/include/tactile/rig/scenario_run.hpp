@@ -46,13 +46,11 @@ class ScenarioRun {
   ScenarioRun(const Scenario& scenario, const CameraParams& camera, LockstepResult& result,
               bool record_series);
 
-  const Scenario& scenario() const { return sc_; }
   const control::Config& config() const { return cfg_; }
   World& world() { return world_; }
   const World& world() const { return world_; }
   SimulatedSensors& sensors() { return sensors_; }
   RunScorer& scorer() { return scorer_; }
-  Report& report() { return result_.report; }
 
   // Steps the world `steps` times by `dt_s`. False when a step gave a non-finite state: the run
   // ends ("physics").
