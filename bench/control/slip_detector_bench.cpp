@@ -97,8 +97,9 @@ BENCHMARK(learned)->ArgName("contacts")->Arg(0)->Arg(5)->Arg(20)->Arg(41);
 int main(int argc, char** argv) {
   using tactile::control::SlipDetector;
   // The model's size and the scoring path this processor takes ("avx2" or "portable").
-  benchmark::AddCustomContext("slip_model", std::to_string(SlipDetector::model_trees()) + " trees");
-  benchmark::AddCustomContext("model_scoring", SlipDetector::model_scoring());
+  benchmark::AddCustomContext("slip_model",
+                              std::to_string(SlipDetector::model().trees()) + " trees");
+  benchmark::AddCustomContext("model_scoring", SlipDetector::model().vector_scoring());
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
   benchmark::RunSpecifiedBenchmarks();

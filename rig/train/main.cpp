@@ -175,7 +175,7 @@ int main(int argc, char** argv) {
     const std::vector<float> fit_weight = rig::train::balance_runs(weight, run_rows, 8.0);
     std::fprintf(stderr, "slip_train: %zu rows (%zu slipping), %zu features; fitting %zu trees\n",
                  label.size(), positives, control::kSlipFeatures, params.trees);
-    const rig::train::BoostedTrees model = rig::train::fit_boosted_trees(
+    const control::ObliviousForest model = rig::train::fit_boosted_trees(
         x, control::kSlipFeatures, label, fit_weight, params, [&](std::size_t t) {
           if (t % 8 == 0 || t == params.trees)
             std::fprintf(stderr, "slip_train: tree %zu/%zu\n", t, params.trees);
@@ -194,11 +194,12 @@ int main(int argc, char** argv) {
       t.fp.assign(levels.size(), 0.0);
       t.fn.assign(levels.size(), 0.0);
       for (std::size_t n = 0; n < runs[k].log.label.size(); ++n, ++row) {
-        const double s = model.score({&x[row * control::kSlipFeatures], control::kSlipFeatures});
+        // The controller's own score and comparison: in float (SlipDetector::decide_learned).
+        const float s = model.score({&x[row * control::kSlipFeatures], control::kSlipFeatures});
         const bool y = label[row] != 0;
         const auto w = static_cast<double>(weight[row]);
         for (std::size_t l = 0; l < levels.size(); ++l) {
-          const bool p = s > levels[l];
+          const bool p = s > static_cast<float>(levels[l]);
           if (p && y) t.tp[l] += w;
           if (p && !y) t.fp[l] += w;
           if (!p && y) t.fn[l] += w;

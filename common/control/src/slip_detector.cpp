@@ -217,12 +217,12 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
 
 void SlipDetector::decide_learned(std::size_t f, std::size_t count, double thr, bool contact_moves,
                                   FingertipSlip& out) noexcept {
-  if (model_trees() == 0) return;
+  if (model().trees() == 0) return;
   const SlipColumns& columns = columns_[f];
   std::size_t n = 0;
   for (std::size_t i = 0; i < count; ++i)
     n += has_features_[f][i] ? 1 : 0;
-  model_scores(columns, n, score_);
+  model().score_columns(columns, n, score_);
   const auto decision = static_cast<float>(model_decision());
   const auto& moved = columns[column(SlipSignal::kMovedDr)];
   const auto& departed = columns[column(SlipSignal::kDepartedDr)];

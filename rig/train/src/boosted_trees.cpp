@@ -34,25 +34,13 @@ std::vector<float> borders_of(std::span<const float> x, std::size_t features, st
 
 }  // namespace
 
-double BoostedTrees::score(std::span<const float> x) const {
-  double s = base;
-  const std::size_t n = trees();
-  for (std::size_t t = 0; t < n; ++t) {
-    std::size_t leaf_index = 0;
-    for (std::size_t d = 0; d < depth; ++d) {
-      const std::size_t k = t * depth + d;
-      leaf_index |= static_cast<std::size_t>(x[feature[k]] > threshold[k]) << d;
-    }
-    s += static_cast<double>(leaf[(t << depth) + leaf_index]);
-  }
-  return s;
-}
-
-BoostedTrees fit_boosted_trees(std::span<const float> x, std::size_t features,
-                               std::span<const std::uint8_t> label, std::span<const float> weight,
-                               const BoostParams& p,
-                               const std::function<void(std::size_t)>& progress) {
-  if (features == 0 || features > 255) throw std::invalid_argument("features must be 1..255");
+control::ObliviousForest fit_boosted_trees(std::span<const float> x, std::size_t features,
+                                           std::span<const std::uint8_t> label,
+                                           std::span<const float> weight, const BoostParams& p,
+                                           const std::function<void(std::size_t)>& progress) {
+  if (features == 0 || features > control::kSlipFeatures)
+    throw std::invalid_argument(
+        fmt::format("features must be 1..{}, got {}", control::kSlipFeatures, features));
   const std::size_t rows = label.size();
   if (rows == 0) throw std::invalid_argument("no training rows");
   if (x.size() != rows * features || weight.size() != rows)
@@ -81,11 +69,10 @@ BoostedTrees fit_boosted_trees(std::span<const float> x, std::size_t features,
     }
   }
 
-  BoostedTrees m;
-  m.features = features;
-  m.depth = p.depth;
-  m.base = std::log(wpos / wneg);
-  std::vector<double> score(rows, m.base), g(rows), h(rows);
+  const double base = std::log(wpos / wneg);
+  std::vector<std::uint8_t> split_feature;
+  std::vector<float> split_threshold, leaf;
+  std::vector<double> score(rows, base), g(rows), h(rows);
   std::vector<std::uint16_t> node(rows);
   const std::size_t leaves = std::size_t{1} << p.depth;
   const std::size_t nb = p.bins;
@@ -119,7 +106,7 @@ BoostedTrees fit_boosted_trees(std::span<const float> x, std::size_t features,
           bool used = false;
           for (std::size_t e = 0; e < d; ++e) {
             const std::size_t k = t * p.depth + e;
-            used = used || (m.feature[k] == f && m.threshold[k] == borders[f][j]);
+            used = used || (split_feature[k] == f && split_threshold[k] == borders[f][j]);
           }
           if (used) continue;
           double gain = 0;
@@ -143,8 +130,8 @@ BoostedTrees fit_boosted_trees(std::span<const float> x, std::size_t features,
           }
         }
       }
-      m.feature.push_back(static_cast<std::uint8_t>(best_f));
-      m.threshold.push_back(borders[best_f].empty() ? 0.0f : borders[best_f][best_split]);
+      split_feature.push_back(static_cast<std::uint8_t>(best_f));
+      split_threshold.push_back(borders[best_f].empty() ? 0.0f : borders[best_f][best_split]);
       const std::uint8_t* fb = &bin[best_f * rows];
       for (std::size_t r = 0; r < rows; ++r) {
         if (fb[r] > best_split) node[r] = static_cast<std::uint16_t>(node[r] | (1u << d));
@@ -158,12 +145,13 @@ BoostedTrees fit_boosted_trees(std::span<const float> x, std::size_t features,
     std::vector<float> value(leaves);
     for (std::size_t l = 0; l < leaves; ++l)
       value[l] = static_cast<float>(-p.learning_rate * lg[l] / (lh[l] + p.l2));
-    m.leaf.insert(m.leaf.end(), value.begin(), value.end());
+    leaf.insert(leaf.end(), value.begin(), value.end());
     for (std::size_t r = 0; r < rows; ++r)
       score[r] += static_cast<double>(value[node[r]]);
     if (progress) progress(t + 1);
   }
-  return m;
+  return control::ObliviousForest(features, p.depth, base, std::move(split_feature),
+                                  std::move(split_threshold), std::move(leaf));
 }
 
 std::vector<float> balance_runs(std::span<const float> weight,
@@ -191,7 +179,8 @@ std::vector<float> balance_runs(std::span<const float> weight,
   return out;
 }
 
-std::string model_source(const BoostedTrees& m, double decision, const std::string& training) {
+std::string model_source(const control::ObliviousForest& m, double decision,
+                         const std::string& training) {
   std::string s;
   s +=
       "// The learned slip detector's model (docs/slip.md, \"The learned combiner\"). Written by\n";
@@ -206,7 +195,7 @@ std::string model_source(const BoostedTrees& m, double decision, const std::stri
   }
   s += fmt::format(
       "inline constexpr SlipModelInfo kSlipModel{{{}, {}, {}, {:.17g}, {:.17g},\n    \"{}\"}};\n",
-      m.features, m.trees(), m.depth, m.base, decision, quoted);
+      m.features(), m.trees(), m.depth(), m.base(), decision, quoted);
   const auto list = [&](const char* decl, std::size_t n, const auto& at) {
     s += fmt::format("inline constexpr {}[{}] = {{", decl, std::max<std::size_t>(n, 1));
     for (std::size_t k = 0; k < n; ++k)
@@ -214,12 +203,12 @@ std::string model_source(const BoostedTrees& m, double decision, const std::stri
     if (n == 0) s += "0";
     s += "};\n";
   };
-  list("std::uint8_t kSlipModelFeature", m.feature.size(),
-       [&](std::size_t k) { return fmt::format("{},", m.feature[k]); });
-  list("float kSlipModelThreshold", m.threshold.size(),
-       [&](std::size_t k) { return fmt::format("{:#.9g}f,", m.threshold[k]); });
-  list("float kSlipModelLeaf", m.leaf.size(),
-       [&](std::size_t k) { return fmt::format("{:#.9g}f,", m.leaf[k]); });
+  list("std::uint8_t kSlipModelFeature", m.feature().size(),
+       [&](std::size_t k) { return fmt::format("{},", m.feature()[k]); });
+  list("float kSlipModelThreshold", m.threshold().size(),
+       [&](std::size_t k) { return fmt::format("{:#.9g}f,", m.threshold()[k]); });
+  list("float kSlipModelLeaf", m.leaf().size(),
+       [&](std::size_t k) { return fmt::format("{:#.9g}f,", m.leaf()[k]); });
   s += "// clang-format on\n";
   return s;
 }

@@ -286,7 +286,7 @@ Config learned_config() {
 TEST(LearnedDetector, ATrainedModelIsCompiledIn) {
   EXPECT_STREQ(to_string(SlipSignal::kFieldReasons), "field_reasons");
   EXPECT_STREQ(kSlipFeatureNames[column(SlipSignal::kShareSlippingPrev)], "share_slipping_prev");
-  EXPECT_GT(SlipDetector::model_trees(), 0U) << "slip_model.inc holds no trees: run slip_train";
+  EXPECT_GT(SlipDetector::model().trees(), 0U) << "slip_model.inc holds no trees: run slip_train";
   EXPECT_EQ(slip_detector_from_string("learned"), SlipDetectorKind::kLearned);
   EXPECT_STREQ(to_string(SlipDetectorKind::kLearned), "learned");
 }
@@ -315,7 +315,8 @@ TEST(LearnedDetector, DecidesEachElementByTheModelsScore) {
           << "frame " << frame << " element " << i;
       for (float v : x)
         ASSERT_TRUE(std::isfinite(v));
-      const bool model = SlipDetector::model_score(x) > SlipDetector::model_decision();
+      const bool model =
+          SlipDetector::model().score(x) > static_cast<float>(SlipDetector::model_decision());
       ASSERT_EQ(slipping(s.state[i]), model) << "frame " << frame << " element " << i;
       ASSERT_EQ(s.reasons[i] != 0, model);
       ++decided;
@@ -348,12 +349,13 @@ TEST(LearnedDetector, FiniteOnEveryInput) {
 }
 
 // The frame's elements scored at once, by the vector path (AVX2 where the processor has it) and
-// by the portable loop, give model_score's scores to the bit, whatever the count of elements:
+// by the portable loop, give the model's own scores to the bit, whatever the count of elements:
 // values on the model's usual thresholds (0, 1, ninths, small integers), beyond every threshold
 // and NaN among them.
 TEST(LearnedDetector, EveryScoringPathGivesTheModelsScoresExactly) {
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-  EXPECT_STREQ(SlipDetector::model_scoring(), __builtin_cpu_supports("avx2") ? "avx2" : "portable");
+  EXPECT_STREQ(SlipDetector::model().vector_scoring(),
+               __builtin_cpu_supports("avx2") ? "avx2" : "portable");
 #endif
   std::mt19937_64 rng(11);
   std::normal_distribution<float> normal(0.0f, 1.0f);
@@ -383,13 +385,13 @@ TEST(LearnedDetector, EveryScoringPathGivesTheModelsScoresExactly) {
         v = value();
     for (std::size_t n : {0, 1, 7, 8, 9, 31, 32, 33, 41, 63, 64}) {
       std::array<float, kMaxSlipElements> vector{}, portable{};
-      SlipDetector::model_scores(columns, n, vector, ModelScoring::kVector);
-      SlipDetector::model_scores(columns, n, portable, ModelScoring::kPortable);
+      SlipDetector::model().score_columns(columns, n, vector, ModelScoring::kVector);
+      SlipDetector::model().score_columns(columns, n, portable, ModelScoring::kPortable);
       for (std::size_t e = 0; e < n; ++e) {
         SlipFeatures x{};
         for (std::size_t k = 0; k < kSlipFeatures; ++k)
           x[k] = columns[k][e];
-        const auto expected = static_cast<float>(SlipDetector::model_score(x));
+        const float expected = SlipDetector::model().score(x);
         ASSERT_EQ(std::bit_cast<std::uint32_t>(vector[e]), std::bit_cast<std::uint32_t>(expected))
             << "draw " << draw << ", " << n << " elements, element " << e;
         ASSERT_EQ(std::bit_cast<std::uint32_t>(portable[e]), std::bit_cast<std::uint32_t>(expected))

@@ -44,7 +44,7 @@ TEST(BoostedTrees, LearnsAConjunctionOfThresholds) {
   BoostParams p;
   p.trees = 40;
   p.depth = 2;
-  const BoostedTrees m = fit_boosted_trees(train.x, 3, train.y, train.w, p);
+  const control::ObliviousForest m = fit_boosted_trees(train.x, 3, train.y, train.w, p);
   ASSERT_EQ(m.trees(), 40U);
   const Data test = make(5000, 0.0, 2);
   std::size_t right = 0;
@@ -57,7 +57,7 @@ TEST(BoostedTrees, LearnsAConjunctionOfThresholds) {
   // The first trees split on the rule's features first, not on the noise (late trees may fit
   // the flipped labels).
   for (std::size_t t = 0; t < 10; ++t)
-    EXPECT_NE(m.feature[t * m.depth], 2U) << "tree " << t;
+    EXPECT_NE(m.feature()[t * m.depth()], 2U) << "tree " << t;
 }
 
 TEST(BoostedTrees, WeightsCountAsRepeatedRows) {
@@ -73,8 +73,8 @@ TEST(BoostedTrees, WeightsCountAsRepeatedRows) {
   BoostParams p;
   p.trees = 5;
   p.quantile_sample = 1;  // the same borders for both
-  const BoostedTrees a = fit_boosted_trees(once.x, 3, once.y, once.w, p);
-  const BoostedTrees b = fit_boosted_trees(thrice.x, 3, thrice.y, thrice.w, p);
+  const control::ObliviousForest a = fit_boosted_trees(once.x, 3, once.y, once.w, p);
+  const control::ObliviousForest b = fit_boosted_trees(thrice.x, 3, thrice.y, thrice.w, p);
   for (std::size_t r = 0; r < 50; ++r)
     EXPECT_NEAR(a.score({&d.x[r * 3], 3}), b.score({&d.x[r * 3], 3}), 1e-4);
 }
@@ -98,7 +98,7 @@ TEST(BoostedTrees, SourceStatesEveryTreeAndTheDecision) {
   BoostParams p;
   p.trees = 3;
   p.depth = 2;
-  const BoostedTrees m = fit_boosted_trees(d.x, 3, d.y, d.w, p);
+  const control::ObliviousForest m = fit_boosted_trees(d.x, 3, d.y, d.w, p);
   const std::string src = model_source(m, 0.5, "test \"model\"");
   EXPECT_NE(src.find("kSlipModel{3, 3, 2,"), std::string::npos) << src;
   EXPECT_NE(src.find("kSlipModelFeature[6]"), std::string::npos) << src;

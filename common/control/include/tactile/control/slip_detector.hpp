@@ -11,11 +11,10 @@
 //   the contact's shear does not follow. Per element a state (stick, incipient, slip) with a
 //   slip velocity. No friction coefficient is configured.
 // learned: the field detector's signals (SlipSignal, slip_signals.hpp) for each element through a
-// small
-//   boosted-tree model compiled in (slip_model.inc, written by slip_train from sweeps of seeds
-//   other than the benchmark's): an element slips when the model's score exceeds its decision
-//   level. The history, the friction estimate and the states' gross/incipient split stay the
-//   field detector's, so the signals do not depend on the model.
+//   small boosted-tree model (ObliviousForest) compiled in (slip_model.inc, written by slip_train
+//   from sweeps of seeds other than the benchmark's): an element slips when the model's score
+//   exceeds its decision level. The history, the friction estimate and the states' gross/incipient
+//   split stay the field detector's, so the signals do not depend on the model.
 //
 // Pure and allocation-free; every output is finite whatever the input (NaN readings count as no
 // contact). Elements beyond kMaxSlipElements of one fingertip are ignored (the sensor has 41).
@@ -24,6 +23,7 @@
 #include <cstdint>
 
 #include "tactile/control/config.hpp"
+#include "tactile/control/oblivious_forest.hpp"
 #include "tactile/control/slip_signals.hpp"
 #include "tactile/control/types.hpp"
 
@@ -72,10 +72,6 @@ inline constexpr std::uint8_t kSlipBrokeAway = 4;
 inline constexpr std::uint8_t kSlipDragged = 8;
 // The learned detector decided slip where none of the field detector's rules did.
 inline constexpr std::uint8_t kSlipLearned = 16;
-
-// How the model scores a frame's elements: with the processor's vector instructions where it has
-// them (AVX2 on x86-64), or the portable loop. Both give model_score's scores exactly.
-enum class ModelScoring : std::uint8_t { kVector, kPortable };
 
 // One fingertip's decisions on its latest fresh frame.
 struct FingertipSlip {
@@ -141,19 +137,10 @@ class SlipDetector {
     return has_features_[fingertip];
   }
   SlipFeatures features(std::size_t fingertip, std::size_t element) const noexcept;
-  // The compiled-in model's score for `x` (the log-odds of slip) and its decision level: the
-  // learned detector decides slip when score > decision.
-  static double model_score(const SlipFeatures& x) noexcept;
+  // The compiled-in model (slip_model.inc; no trees: learned decides as field) and its decision
+  // level: the learned detector decides slip when the model's score exceeds it.
+  static const ObliviousForest& model() noexcept;
   static double model_decision() noexcept;
-  // model_score of the first `n` elements of `columns` at once, into score[0, n): what the learned
-  // detector runs on each frame. kVector falls back to the portable loop where the processor has
-  // no vector path; model_scoring() names the one kVector uses ("avx2" or "portable").
-  static void model_scores(const SlipColumns& columns, std::size_t n,
-                           std::array<float, kMaxSlipElements>& score,
-                           ModelScoring scoring = ModelScoring::kVector) noexcept;
-  static const char* model_scoring() noexcept;
-  // Trees in the compiled-in model (0: none trained; learned then decides as field).
-  static std::size_t model_trees() noexcept;
 
  private:
   void decide_paper(const FingertipInput& in, double threshold_mm, FingertipSlip& out) noexcept;

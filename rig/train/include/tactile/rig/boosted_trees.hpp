@@ -1,17 +1,17 @@
 #pragma once
 
-// Gradient-boosted oblivious trees for a binary label (the learned slip detector's model,
-// docs/slip.md, "The learned combiner"). Oblivious: every node of one depth of a tree splits on
-// the same feature and threshold, so a tree of depth D is D comparisons and a table of 2^D
-// leaves, evaluated without branches. Logistic loss, second-order leaf values with an L2
-// penalty, histogram splits on quantile bins. Pure and deterministic: the same rows give the
-// same model on every machine (no threads, sums in row order).
+// Fitting gradient-boosted oblivious trees (control::ObliviousForest, the learned slip detector's
+// model, docs/slip.md, "The learned combiner") for a binary label. Logistic loss, second-order leaf
+// values with an L2 penalty, histogram splits on quantile bins. Pure and deterministic: the same
+// rows give the same model on every machine (no threads, sums in row order).
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <span>
 #include <string>
 #include <vector>
+
+#include "tactile/control/oblivious_forest.hpp"
 
 namespace tactile::rig::train {
 
@@ -25,26 +25,16 @@ struct BoostParams {
   std::size_t quantile_sample = 200000;
 };
 
-struct BoostedTrees {
-  std::size_t features = 0;
-  std::size_t depth = 0;
-  double base = 0;  // the log-odds of the weighted label mean
-  // Per tree and depth d: the split "x[feature] > threshold" sets bit d of the leaf's index.
-  std::vector<std::uint8_t> feature;
-  std::vector<float> threshold;
-  std::vector<float> leaf;  // per tree, 2^depth values
-  std::size_t trees() const { return depth == 0 ? 0 : feature.size() / depth; }
-  // The log-odds of the label for one row of `features` values.
-  double score(std::span<const float> x) const;
-};
-
-// Rows: `x` row-major (rows x features), `label` 0/1, `weight` > 0. Throws std::invalid_argument
-// for inconsistent sizes, no rows, a single class or bad parameters. `progress` (optional) is
+// Rows: `x` row-major (rows x features, at most control::kSlipFeatures features), `label` 0/1,
+// `weight` > 0. Throws std::invalid_argument for inconsistent sizes, no rows, a single class or
+// bad parameters. `progress` (optional) is
 // called after each tree with the count done.
-BoostedTrees fit_boosted_trees(std::span<const float> x, std::size_t features,
-                               std::span<const std::uint8_t> label, std::span<const float> weight,
-                               const BoostParams& params,
-                               const std::function<void(std::size_t)>& progress = {});
+// The fitted model is the controller's own model type: slip_train scores it as the learned
+// detector does.
+control::ObliviousForest fit_boosted_trees(std::span<const float> x, std::size_t features,
+                                           std::span<const std::uint8_t> label,
+                                           std::span<const float> weight, const BoostParams& params,
+                                           const std::function<void(std::size_t)>& progress = {});
 
 // The fit's weights for rows that come from runs scored one by one (the sweep's precision and
 // recall per run): run k's `run_rows[k]` rows, in order, scaled so that their total weight is the
@@ -54,6 +44,7 @@ std::vector<float> balance_runs(std::span<const float> weight,
 
 // The model as the C++ source slip_detector.cpp includes (slip_model.inc): `decision` is the
 // score above which an element slips, `training` a line saying how it was made.
-std::string model_source(const BoostedTrees& model, double decision, const std::string& training);
+std::string model_source(const control::ObliviousForest& model, double decision,
+                         const std::string& training);
 
 }  // namespace tactile::rig::train
