@@ -43,10 +43,12 @@ restore_machine() {
   done
   if [ -e "$saved_rules.no-docker0" ] && ip link show docker0 >/dev/null 2>&1; then ip link delete docker0; fi
 }
-# stop_dockerd DIR: the dockerd whose pidfile is in DIR, and waits until it has gone.
+# stop_dockerd DIR: the dockerd whose pidfile is in DIR (that process, not another that took its
+# PID), and waits until it has gone.
 stop_dockerd() {
   local pid
   pid=$(cat "$1/dockerd.pid" 2>/dev/null || true)
+  [[ "$(tr '\0' ' ' 2>/dev/null <"/proc/$pid/cmdline")" == *" --pidfile $1/dockerd.pid "* ]] || return 0
   if [ -n "$pid" ] && kill "$pid" 2>/dev/null; then
     for _ in $(seq 1 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.2; done
     kill -0 "$pid" 2>/dev/null && kill -9 "$pid" 2>/dev/null || true
@@ -79,11 +81,14 @@ for dir in /var/tmp/compose-test.*-*; do
   dead=${dir#/var/tmp/compose-test.}
   if ! [[ "$dead" =~ ^[0-9]+-[0-9]+$ ]] || ! owner_gone "${dead/-/:}"; then continue; fi
   stop_dockerd "$dir"
-  if [ -s "$dir/ruleset.nft" ] && ! docker info >/dev/null 2>&1; then
+  restored="the engine that answers now kept"
+  # Only when that test started the engine (it saved the machine first) and none runs now.
+  if [ -e "$dir/ruleset.nft" ] && ! docker info >/dev/null 2>&1; then
     saved_rules=$dir/ruleset.nft restore_machine
+    restored="the firewall and forwarding it found restored"
   fi
   rm -rf "$dir"
-  say "removed $dir left by an earlier run (pid ${dead%%-*}, no longer running): its dockerd stopped, the firewall and forwarding it found restored"
+  say "removed $dir left by an earlier run (pid ${dead%%-*}, no longer running): its dockerd stopped, $restored"
 done
 
 if docker info >/dev/null 2>&1; then
@@ -94,7 +99,9 @@ else
     exit 77
   fi
   command -v dockerd >/dev/null 2>&1 || fail "dockerd is missing (bash scripts/install-deps --test installs docker.io)"
+  # Empty when nft is missing or the ruleset is: the file says that this test saved the machine.
   saved_rules=$work/ruleset.nft
+  : >"$saved_rules"
   if command -v nft >/dev/null 2>&1; then nft list ruleset >"$saved_rules"; fi
   for s in net.ipv4.ip_forward net.ipv6.conf.all.forwarding; do
     sysctl -n "$s" >"$saved_rules.$s" 2>/dev/null || true

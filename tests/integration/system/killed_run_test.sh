@@ -5,7 +5,7 @@
 # no network namespace (`ip netns list`), link (`ip -o link`) or nft rule more, no process of the
 # runs left.
 #
-#   killed_run_test.sh SOURCE_DIR BUILD_DIR run-system|camera-link|bench-gige-link|namespaced
+#   killed_run_test.sh SOURCE_DIR BUILD_DIR run-system|camera-link|bench-gige-link|namespaced|compose-test
 #
 # Root only (namespaces and veth pairs on the host). Exit 0 on success, 1 on a failure (the line
 # says which check).
@@ -193,6 +193,55 @@ case "$which" in
       fail "the next run did not remove the four namespaces with a line each: $(cat "$work/second.log")"
     check_as_before
     ;;
-  *) fail "give run-system, camera-link, bench-gige-link or namespaced" ;;
+  compose-test)
+    # The compose test (tests/integration/docker) killed once the dockerd it started answers: the
+    # dockerd stops with it, and the next test restores the firewall and forwarding the killed one
+    # found (its folder holds them) before it starts an engine of its own.
+    if docker info >/dev/null 2>&1; then
+      say "a Docker engine already answers here: the compose test would start none"
+      exit 77
+    fi
+    # The engine's processes count as the machine here: the next start of dockerd waits for a
+    # containerd that is still ending (and gave up after 30 s once).
+    machine() {
+      ip netns list | sed 's/ .*//' | sort
+      ip -o link show | sed 's/^[0-9]*: \([^:@]*\).*/link \1/' | sort
+      nft list ruleset 2>/dev/null || true
+      { pgrep -x dockerd || true; } | sed 's/^/dockerd /'
+      { pgrep -x containerd || true; } | sed 's/^/containerd /'
+    }
+    before=$(machine)
+    forwarding=$(sysctl -n net.ipv4.ip_forward)
+    before_rules=$(nft list ruleset 2>/dev/null)
+    compose_test() {
+      bash tests/integration/docker/compose_test.sh . >"$work/$1.log" 2>&1 &
+      pids+=($!)
+    }
+    compose_test first
+    for _ in $(seq 150); do docker info >/dev/null 2>&1 && break; sleep 0.2; done
+    docker info >/dev/null 2>&1 || fail "the first test's dockerd did not answer: $(cat "$work/first.log")"
+    kill -KILL "${pids[0]}"
+    wait "${pids[0]}" 2>/dev/null || true
+    say "killed the first test (SIGKILL) once its dockerd answered"
+    for _ in $(seq 100); do docker info >/dev/null 2>&1 || break; sleep 0.2; done
+    ! docker info >/dev/null 2>&1 || fail "the first test's dockerd outlived it by 20 s"
+    compose_test second
+    await_line "$work/second.log" "compose_test: removed /var/tmp/compose-test\.${pids[0]}-[0-9]+ left by an earlier run \(pid ${pids[0]}, no longer running\): its dockerd stopped, the firewall and forwarding it found restored" ||
+      fail "the second test did not restore what the first left: $(cat "$work/second.log")"
+    saved=$(echo /var/tmp/compose-test."${pids[1]}"-*)
+    for _ in $(seq 50); do [ -e "$saved/ruleset.nft.net.ipv4.ip_forward" ] && break; sleep 0.1; done
+    [ "$(cat "$saved/ruleset.nft")" = "$before_rules" ] ||
+      fail "the second test found another ruleset than the first: $(diff <(echo "$before_rules") "$saved/ruleset.nft")"
+    [ "$(cat "$saved/ruleset.nft.net.ipv4.ip_forward")" = "$forwarding" ] ||
+      fail "the second test found forwarding $(cat "$saved/ruleset.nft.net.ipv4.ip_forward"), not $forwarding"
+    # A stop (SIGTERM) ends the second as a test ends: its engine stopped, the machine restored.
+    kill -TERM "${pids[1]}"
+    wait "${pids[1]}" 2>/dev/null || true
+    [ "$(sysctl -n net.ipv4.ip_forward)" = "$forwarding" ] || fail "forwarding is not as found"
+    ! ls -d /var/tmp/compose-test."${pids[0]}"-* /var/tmp/compose-test."${pids[1]}"-* 2>/dev/null ||
+      fail "a test's folder is left"
+    check_as_before
+    ;;
+  *) fail "give run-system, camera-link, bench-gige-link, namespaced or compose-test" ;;
 esac
 say "passed"
