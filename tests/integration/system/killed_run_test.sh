@@ -8,7 +8,7 @@
 #   killed_run_test.sh SOURCE_DIR BUILD_DIR run-system|camera-link|bench-gige-link|namespaced|compose-test
 #
 # Root only (namespaces and veth pairs on the host). Exit 0 on success, 1 on a failure (the line
-# says which check).
+# says which check), 77 for compose-test when a Docker engine already runs here (ctest: skipped).
 set -euo pipefail
 src=$(cd "${1:?usage: killed_run_test.sh SOURCE_DIR BUILD_DIR WHICH}" && pwd)
 build=$(cd "${2:?usage: killed_run_test.sh SOURCE_DIR BUILD_DIR WHICH}" && pwd)
