@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <sstream>
 
 #include "process.hpp"
 
@@ -33,10 +35,49 @@ void ip(const std::vector<std::string>& args) {
   }
 }
 
+// The owner of the namespaces a Network makes, "PID-START" (START the process's start time,
+// /proc/PID/stat field 22, so a reused PID is not taken for it; scripts/lib/leftovers.sh); empty
+// when PID does not run.
+std::string owner_of(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string stat;
+  if (!std::getline(in, stat) || stat.rfind(')') == std::string::npos) return "";
+  // After the command name (which may hold spaces): field 3 onwards.
+  std::istringstream fields(stat.substr(stat.rfind(')') + 2));
+  std::string field;
+  for (int i = 3; i <= 22 && fields >> field; ++i) {
+  }
+  return std::to_string(pid) + "-" + field;
+}
+
+// The namespaces of a test that was killed before its Network went (tsc-HOST-PID-START whose
+// owner no longer runs): what still runs in them is killed and they are deleted, with a line
+// each (docs/reliability.md, "What a killed run leaves").
+void remove_leftovers() {
+  const auto list = testing::run({"ip", "netns", "list"}, 10s);
+  std::istringstream lines(list.out);
+  std::string line;
+  const std::regex ours("^(tsc-(br|rig|sen|hand)-(([0-9]+)-[0-9]+))( .*)?$");
+  std::smatch m;
+  while (std::getline(lines, line)) {
+    if (!std::regex_match(line, m, ours) || owner_of(std::stoi(m[4].str())) == m[3].str()) continue;
+    const std::string ns = m[1].str();
+    std::istringstream pids(testing::run({"ip", "netns", "pids", ns}, 10s).out);
+    for (std::string pid; pids >> pid;)
+      ::kill(std::stoi(pid), SIGKILL);
+    if (testing::run({"ip", "netns", "del", ns}, 10s).exit_code == 0)
+      std::fprintf(stderr,
+                   "namespaced_system_test: removed namespace %s left by an earlier run (pid %s, "
+                   "no longer running)\n",
+                   ns.c_str(), m[4].str().c_str());
+  }
+}
+
 // Three hosts and a switch; everything is deleted when the object goes.
 class Network {
  public:
-  Network() : tag_(std::to_string(::getpid() % 100000)) {
+  Network() : tag_(owner_of(::getpid())) {
+    remove_leftovers();
     for (const char* h : {"br", "rig", "sen", "hand"}) {
       const std::string ns = name(h);
       ip({"netns", "add", ns});
@@ -90,6 +131,30 @@ class Network {
   std::string tag_;
   std::vector<std::string> made_;
 };
+
+// A killed test's namespaces (a stand-in: its owner's PID with a start time it never had) go;
+// another's that runs (this process) stay. tests/integration/system/killed_run_test.sh kills a
+// real run and has this test remove what it left.
+TEST(NamespacedSystem, RemovesTheNamespacesOfAKilledRunAndNoOthers) {
+  ASSERT_EQ(::geteuid(), 0U) << "network namespaces need root (CI runs as root)";
+  const std::string dead = "tsc-br-" + std::to_string(::getpid()) + "-1";
+  const std::string live = "tsc-hand-" + owner_of(::getpid());
+  ip({"netns", "add", dead});
+  ip({"netns", "add", live});
+  ::testing::internal::CaptureStderr();
+  remove_leftovers();
+  const std::string said = ::testing::internal::GetCapturedStderr();
+  std::fputs(said.c_str(), stderr);
+  const std::string names = testing::run({"ip", "netns", "list"}, 10s).out;
+  testing::run({"ip", "netns", "del", live}, 10s);
+  testing::run({"ip", "netns", "del", dead}, 10s);
+  EXPECT_EQ(names.find(dead), std::string::npos) << names;
+  EXPECT_NE(names.find(live), std::string::npos) << names;
+  EXPECT_NE(said.find("removed namespace " + dead + " left by an earlier run (pid " +
+                      std::to_string(::getpid()) + ", no longer running)"),
+            std::string::npos)
+      << said;
+}
 
 TEST(NamespacedSystem, RunsTheComposeTopologyWithDockersConfiguration) {
   ASSERT_EQ(::geteuid(), 0U)

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/ioctl.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -264,9 +265,14 @@ class PtyProcess {
     ws.ws_col = 100;
     ws.ws_row = 40;
     ioctl(master_, TIOCSWINSZ, &ws);
+    const pid_t parent = getpid();
     pid_ = fork();
     if (pid_ == 0) {
       setsid();
+      // A session of its own, so the test's terminal signals miss it: it dies with the test
+      // instead, even a test killed by SIGKILL (docs/reliability.md, "What a killed run leaves").
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (getppid() != parent) _exit(127);
       const int s = open(slave.c_str(), O_RDWR);
       dup2(s, 0);
       dup2(s, 1);
