@@ -4,7 +4,8 @@
 # configuration, state, logs and sockets in a temporary folder and ports of its own, runs
 # scripts/sweep-slurm on it and compares with one machine's run, byte for byte; kills a shard mid-run
 # and checks it is found and run again (only its missing scenarios) to the same table; then trains
-# from shards. Stops everything it started and checks the machine is left as found.
+# from shards, one of them killed (SIGKILL) and run again, to one process's model. Stops
+# everything it started and checks the machine is left as found.
 #
 #   bash slurm_test.sh SOURCE_DIR RIG SLIP_TRAIN        (as root)
 set -euo pipefail
@@ -169,11 +170,28 @@ say "shard $killed killed mid-run, found and resumed: still the same table"
 train=(--scenarios 2 --max-time 6 --trees 4 --depth 3)
 "$slip_train" --seeds 5,6 "${train[@]}" --jobs 2 --out "$work/whole.inc" 2>"$work/train-whole.log" ||
   fail "slip_train on one machine failed: $(tail -n 3 "$work/train-whole.log")"
+# Shard 2 of 3 (run 1 of 4) killed with SIGKILL while slip_train runs, as the kernel's OOM
+# killer does: no rows file, the job FAILED; it runs again whole.
 bash "$src/scripts/sweep-slurm" train --seeds 5,6 "${train[@]}" --shards 3 --out "$work/train" \
-  --slip-train "$slip_train" --poll 0.3 --timeout 120 2>"$work/train.log" ||
-  { cat "$work/train.log" >&2; fail "sweep-slurm train failed"; }
+  --slip-train "$slip_train" --poll 0.3 --timeout 120 2>"$work/train.log" &
+script=$!
+killed=""
+for _ in $(seq 600); do
+  # The one process whose arguments name this test's own shard-2 rows file.
+  for pid in $(pgrep -x slip_train); do
+    if tr '\0' ' ' <"/proc/$pid/cmdline" 2>/dev/null | grep -qF -- "--rows-out $work/train/rows/shard-2.rows"; then
+      kill -KILL "$pid" && killed=$pid
+    fi
+  done
+  [ -z "$killed" ] || break
+  sleep 0.1
+done
+[ -n "$killed" ] || { kill "$script"; fail "shard 2's slip_train was never seen running"; }
+wait "$script" || { cat "$work/train.log" >&2; fail "sweep-slurm train failed"; }
+cat "$work/train.log" >&2
+grep -q "shards 2 did not finish" "$work/train.log" || fail "the killed training shard was not found"
 cmp "$work/whole.inc" "$work/train/slip_model.inc" || fail "the model fitted from the shards' rows differs"
-say "training rows from 3 shards, fitted once: the same model as one machine"
+say "training rows from 3 shards (one killed and run again), fitted once: the same model as one machine"
 
 # --- the machine as found -----------------------------------------------------------------------
 trap - EXIT
