@@ -160,7 +160,8 @@ int run(int argc, char** argv) {
   app.add_option("--shard", shard, "sweep: run only part K of N of the draw, as K/N");
   app.add_flag("--resume", sweep.resume,
                "sweep: keep the runs whose reports --out holds from an earlier run of the same "
-               "sweep (cut short by a signal or a kill) and run only the others");
+               "sweep (cut short by a signal or a kill) and run only the others")
+      ->needs(sweep_opt);
   app.add_option("--max-sim-time", sweep.max_sim_time_s,
                  "sweep: cut each scenario at this much simulated time (s; short test sweeps)")
       ->check(CLI::Range(0.1, 3600.0));

@@ -143,7 +143,9 @@ int main(int argc, char** argv) {
       "in the controller), logs each measured element-frame's signals with the truth's label,\n"
       "fits boosted oblivious trees and writes the model as C++ source to --out, which\n"
       "common/control/src/slip_detector.cpp includes; rebuild to use it. Never train on the\n"
-      "seeds the benchmark sweep is scored on."};
+      "seeds the benchmark sweep is scored on. On a cluster: --shard K/N --rows-out FILE runs a\n"
+      "share of the runs and writes their rows, --rows-in FILE... fits once from all shards'\n"
+      "rows (scripts/sweep-slurm train)."};
   app.add_option("--seeds", seeds, "training sweep seeds, separated by commas")
       ->delimiter(',')
       ->check(CLI::Validator(

@@ -744,6 +744,7 @@ TEST(Sweep, UsageErrorsExit2) {
            {"--sweep", "3"},                                                   // no --out
            {"--sweep", "3", "--out", (dir / "x").string(), "--shard", "4/3"},  // K > N
            {"--sweep", "3", "--out", (dir / "x").string(), "--shard", "1-3"},
+           {"--sweep-merge", (dir / "x").string(), "--out", (dir / "y").string(), "--resume"},
            {"--sweep", "0", "--out", (dir / "x").string()},
            {"--lockstep"},  // no --scenario
            {"--sweep", "3", "--out", (dir / "x").string(), "--detectors", "paper,wavelet"},
