@@ -43,7 +43,7 @@ int run(int argc, char** argv) {
       "  rig --scenario FILE --write-configs DIR\n"
       "writes the sensors' calibrations and the configurations of sensor_node and hand_node for "
       "it.\n"
-      "  rig --sweep N --seed S --out DIR [--jobs J] [--shard K/N]\n"
+      "  rig --sweep N --seed S --out DIR [--jobs J] [--shard K/N] [--resume]\n"
       "draws N random scenarios, runs each in lockstep in a child rig process and writes\n"
       "DIR/sweep.csv, summary.md and sweep.png (docs/slip.md).\n"
       "  rig --sweep-merge DIR... --out DIR\n"
@@ -158,6 +158,10 @@ int run(int argc, char** argv) {
   app.add_option("--jobs", sweep.jobs, "sweep: child processes at a time (default: the cores)")
       ->check(CLI::Range(1, 1024));
   app.add_option("--shard", shard, "sweep: run only part K of N of the draw, as K/N");
+  app.add_flag("--resume", sweep.resume,
+               "sweep: keep the runs whose reports --out holds from an earlier run of the same "
+               "sweep (cut short by a signal or a kill) and run only the others")
+      ->needs(sweep_opt);
   app.add_option("--max-sim-time", sweep.max_sim_time_s,
                  "sweep: cut each scenario at this much simulated time (s; short test sweeps)")
       ->check(CLI::Range(0.1, 3600.0));
@@ -178,19 +182,12 @@ int run(int argc, char** argv) {
         return 0;
       }
       if (!shard.empty()) {
-        const auto slash = shard.find('/');
         try {
-          std::size_t used = 0;
-          sweep.shard = std::stoi(shard.substr(0, slash), &used);
-          if (slash == std::string::npos || used != slash) throw std::invalid_argument(shard);
-          sweep.shards = std::stoi(shard.substr(slash + 1), &used);
-          if (used != shard.size() - slash - 1) throw std::invalid_argument(shard);
-        } catch (const std::exception&) {
-          throw tactile::cli::UsageError("--shard must be K/N, for example 2/3; got '" + shard +
-                                         "'");
-        }
-        if (sweep.shards < 1 || sweep.shard < 1 || sweep.shard > sweep.shards) {
-          throw tactile::cli::UsageError("--shard K/N needs 1 <= K <= N; got '" + shard + "'");
+          const tactile::rig::sweep::Shard k = tactile::rig::sweep::parse_shard(shard);
+          sweep.shard = k.shard;
+          sweep.shards = k.shards;
+        } catch (const std::invalid_argument& e) {
+          throw tactile::cli::UsageError(std::string("--shard: ") + e.what());
         }
       }
       if (!slip_detector.empty())

@@ -22,6 +22,7 @@
 #include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/scenario.hpp"
 #include "tactile/rig/sweep.hpp"
+#include "tactile/rig/training_rows.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/percentile.hpp"
@@ -39,6 +40,80 @@ struct Run {
   rig::SlipFeatureLog log;
   std::string error;
 };
+
+// --rows-out: the rows of the runs `selected` (a shard's), with what every shard shares.
+rig::train::TrainingRows shard_rows(const std::vector<Run>& runs,
+                                    const std::vector<std::uint64_t>& selected,
+                                    rig::train::TrainingRows shared) {
+  for (const std::uint64_t k : selected) {
+    const Run& r = runs[k];
+    rig::train::RowsOfRun out{r.seed, r.index, {}, r.log.label, r.log.weight};
+    for (const auto& row : r.log.x)
+      out.x.insert(out.x.end(), row.begin(), row.end());
+    shared.runs.push_back(std::move(out));
+  }
+  return shared;
+}
+
+// --rows-in: the shards' files into `runs` (planned from the files' seeds and scenarios), each
+// run once; throws naming the file for shards of different trainings, a run twice or missing.
+void load_rows(const std::vector<std::string>& files, rig::train::TrainingRows& shared,
+               std::vector<Run>& runs) {
+  std::vector<std::string> from;  // per run, the file it came from
+  for (std::size_t f = 0; f < files.size(); ++f) {
+    rig::train::TrainingRows part =
+        rig::train::parse_rows_file(tactile::util::read_file(files[f]), files[f]);
+    if (f == 0) {
+      shared = part;
+      for (const std::uint64_t s : shared.seeds)
+        for (std::uint64_t i = 0; i < shared.scenarios; ++i)
+          runs.push_back(Run{s, i, {}, {}});
+      from.assign(runs.size(), "");
+    } else if (part.seeds != shared.seeds || part.scenarios != shared.scenarios ||
+               part.max_time_s != shared.max_time_s || part.controller != shared.controller ||
+               part.features != shared.features || part.shards != shared.shards) {
+      throw std::runtime_error(fmt::format(
+          "{}: seeds {}, {} scenarios, max time {}, controller {}, {} shards; {} has seeds {}, {}, "
+          "{}, {}, {}: not shards of one training",
+          files[f], fmt::join(part.seeds, ","), part.scenarios, part.max_time_s, part.controller,
+          part.shards, files[0], fmt::join(shared.seeds, ","), shared.scenarios, shared.max_time_s,
+          shared.controller, shared.shards));
+    }
+    if (part.features != control::kSlipFeatures) {
+      throw std::runtime_error(fmt::format("{}: rows of {} features; this slip_train has {}",
+                                           files[f], part.features, control::kSlipFeatures));
+    }
+    for (rig::train::RowsOfRun& r : part.runs) {
+      const auto seed = std::find(shared.seeds.begin(), shared.seeds.end(), r.seed);
+      if (seed == shared.seeds.end() || r.index >= shared.scenarios)
+        throw std::runtime_error(fmt::format("{}: seed {} scenario {} is not one of its runs",
+                                             files[f], r.seed, r.index));
+      const auto k =
+          static_cast<std::size_t>(seed - shared.seeds.begin()) * shared.scenarios + r.index;
+      if (!from[k].empty())
+        throw std::runtime_error(fmt::format("{}: seed {} scenario {} is in {} too", files[f],
+                                             r.seed, r.index, from[k]));
+      from[k] = files[f];
+      rig::SlipFeatureLog& log = runs[k].log;
+      for (std::size_t n = 0; n < r.label.size(); ++n) {
+        control::SlipFeatures row{};
+        std::copy_n(r.x.begin() + static_cast<std::ptrdiff_t>(n * part.features), part.features,
+                    row.begin());
+        log.x.push_back(row);
+      }
+      log.label = std::move(r.label);
+      log.weight = std::move(r.weight);
+    }
+  }
+  const auto missing = std::find(from.begin(), from.end(), "");
+  if (missing != from.end()) {
+    const Run& r = runs[static_cast<std::size_t>(missing - from.begin())];
+    throw std::runtime_error(fmt::format(
+        "{} of {} runs missing, the first seed {} scenario {}: a shard's rows are not among "
+        "--rows-in",
+        std::count(from.begin(), from.end(), ""), runs.size(), r.seed, r.index));
+  }
+}
 
 // Per run, weighted counts at each decision level: precision and recall of the rows.
 struct Tally {
@@ -68,7 +143,9 @@ int main(int argc, char** argv) {
       "in the controller), logs each measured element-frame's signals with the truth's label,\n"
       "fits boosted oblivious trees and writes the model as C++ source to --out, which\n"
       "common/control/src/slip_detector.cpp includes; rebuild to use it. Never train on the\n"
-      "seeds the benchmark sweep is scored on."};
+      "seeds the benchmark sweep is scored on. On a cluster: --shard K/N --rows-out FILE runs a\n"
+      "share of the runs and writes their rows, --rows-in FILE... fits once from all shards'\n"
+      "rows (scripts/sweep-slurm train)."};
   app.add_option("--seeds", seeds, "training sweep seeds, separated by commas")
       ->delimiter(',')
       ->check(CLI::Validator(
@@ -108,21 +185,66 @@ int main(int argc, char** argv) {
                  "runs it is trained on, as they steer the sweep's)")
       ->check(CLI::IsMember({"field", "learned"}))
       ->capture_default_str();
+  std::string shard;
+  std::string rows_out;
+  std::vector<std::string> rows_in;
+  app.add_option("--shard", shard,
+                 "run only part K of N of the runs (runs k, in seed-then-scenario order, with "
+                 "k mod N = K - 1), as K/N; with --rows-out (docs/slip.md, \"Training on a "
+                 "cluster\")");
+  auto* rows_out_opt = app.add_option("--rows-out", rows_out,
+                                      "write the runs' training rows to this file and fit nothing");
+  auto* rows_in_opt =
+      app.add_option("--rows-in", rows_in,
+                     "fit from these rows files (every shard's --rows-out) instead of running; "
+                     "the seeds, scenarios, max time and controller are theirs")
+          ->excludes(rows_out_opt);
   tactile::cli::add_log_level(app, log_level);
   return tactile::cli::run(app, argc, argv, [&] {
     tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
     tactile::util::install_stop_handlers();
 
+    rig::train::TrainingRows shared;
+    shared.seeds = seeds;
+    shared.scenarios = scenarios;
+    shared.max_time_s = max_time_s;
+    shared.controller = controller;
+    shared.features = control::kSlipFeatures;
+    if (!shard.empty()) {
+      if (!*rows_out_opt) throw tactile::cli::UsageError("--shard needs --rows-out");
+      try {
+        const rig::sweep::Shard k = rig::sweep::parse_shard(shard);
+        shared.shard = k.shard;
+        shared.shards = k.shards;
+      } catch (const std::invalid_argument& e) {
+        throw tactile::cli::UsageError(std::string("--shard: ") + e.what());
+      }
+    }
     std::vector<Run> runs;
-    for (const std::uint64_t s : seeds)
-      for (std::uint64_t i = 0; i < scenarios; ++i)
-        runs.push_back(Run{s, i, {}, {}});
+    std::vector<std::uint64_t> selected;
+    if (*rows_in_opt) {
+      for (const char* name : {"--seeds", "--scenarios", "--max-time", "--controller"}) {
+        if (app.count(name) > 0)
+          throw tactile::cli::UsageError(std::string("--rows-in takes no ") + name +
+                                         ": the rows files say how they were made");
+      }
+      load_rows(rows_in, shared, runs);
+      seeds = shared.seeds;
+      scenarios = shared.scenarios;
+      max_time_s = shared.max_time_s;
+      controller = shared.controller;
+    } else {
+      for (const std::uint64_t s : seeds)
+        for (std::uint64_t i = 0; i < scenarios; ++i)
+          runs.push_back(Run{s, i, {}, {}});
+      selected = rig::sweep::shard_indices(runs.size(), shared.shard, shared.shards);
+    }
     std::atomic<std::size_t> next{0}, done{0};
     std::mutex print;
     const auto worker = [&] {
-      for (std::size_t k; (k = next++) < runs.size();) {
+      for (std::size_t n; (n = next++) < selected.size();) {
         if (tactile::util::stop_requested()) return;
-        Run& r = runs[k];
+        Run& r = runs[selected[n]];
         try {
           const rig::sweep::Draw d = rig::sweep::draw_scenario(r.seed, r.index);
           rig::Scenario sc =
@@ -138,7 +260,7 @@ int main(int argc, char** argv) {
         }
         const std::lock_guard lock(print);
         std::fprintf(stderr, "slip_train: run %zu/%zu (seed %llu scenario %llu): %zu rows\n",
-                     ++done, runs.size(), static_cast<unsigned long long>(r.seed),
+                     ++done, selected.size(), static_cast<unsigned long long>(r.seed),
                      static_cast<unsigned long long>(r.index), r.log.label.size());
       }
     };
@@ -151,6 +273,13 @@ int main(int argc, char** argv) {
     for (const Run& r : runs) {
       if (!r.error.empty())
         throw std::runtime_error(fmt::format("seed {} scenario {}: {}", r.seed, r.index, r.error));
+    }
+    if (*rows_out_opt) {
+      tactile::util::write_file_atomic(rows_out,
+                                       rig::train::rows_file(shard_rows(runs, selected, shared)));
+      std::fprintf(stderr, "slip_train: wrote the rows of %zu runs (shard %d/%d) to %s\n",
+                   selected.size(), shared.shard, shared.shards, rows_out.c_str());
+      return 0;
     }
 
     // The rows in run order, so the model does not depend on --jobs.

@@ -110,6 +110,23 @@ std::vector<std::uint64_t> shard_indices(std::uint64_t scenarios, int shard, int
   return v;
 }
 
+Shard parse_shard(const std::string& text) {
+  const auto slash = text.find('/');
+  Shard k;
+  try {
+    std::size_t used = 0;
+    k.shard = std::stoi(text.substr(0, slash), &used);
+    if (slash == std::string::npos || used != slash) throw std::invalid_argument(text);
+    k.shards = std::stoi(text.substr(slash + 1), &used);
+    if (used != text.size() - slash - 1) throw std::invalid_argument(text);
+  } catch (const std::exception&) {
+    throw std::invalid_argument("must be K/N, for example 2/3; got '" + text + "'");
+  }
+  if (k.shards < 1 || k.shard < 1 || k.shard > k.shards)
+    throw std::invalid_argument("K/N needs 1 <= K <= N; got '" + text + "'");
+  return k;
+}
+
 std::size_t run_sweep(const SweepOptions& o) {
   const std::vector<std::uint64_t> indices = shard_indices(o.scenarios, o.shard, o.shards);
   const std::string program = o.child_program.empty() ? "/proc/self/exe" : o.child_program;
@@ -118,19 +135,44 @@ std::size_t run_sweep(const SweepOptions& o) {
   for (const char* sub : {"scenarios", "reports", "logs"})
     util::check_writable_dir(o.out / sub);
 
+  // A sweep.json is what says a run ended (sweep-slurm's test of a shard): none until this one has.
+  std::error_code no_info;
+  fs::remove(o.out / "sweep.json", no_info);
   // Every scenario file first: each can be re-run alone, also those a stop leaves unrun.
   std::map<std::uint64_t, Draw> draws;
   std::vector<Job> queue;
+  std::vector<Row> rows;
+  std::size_t kept = 0;
   for (const std::uint64_t i : indices) {
     draws[i] = draw_scenario(o.seed, i);
-    util::write_file_atomic(paths_of(o.out, i, o.scenarios, "").scenario,
-                            scenario_yaml(draws[i], o.max_sim_time_s));
+    const std::string yaml = scenario_yaml(draws[i], o.max_sim_time_s);
+    const fs::path scenario = paths_of(o.out, i, o.scenarios, "").scenario;
+    // --resume keeps a report only beside this draw's scenario file: not one of another sweep.
+    bool same_scenario = false;
+    if (o.resume && fs::exists(scenario)) same_scenario = util::read_file(scenario) == yaml;
+    util::write_file_atomic(scenario, yaml);
     for (const std::string& detector : o.detectors) {
+      const fs::path report = paths_of(o.out, i, o.scenarios, detector).report;
+      if (same_scenario && fs::exists(report)) {
+        try {
+          // Reports are written whole (atomically): one that is there is the run's.
+          for (Row& r : rows_from_report(draws[i], util::read_file(report)))
+            rows.push_back(std::move(r));
+          ++kept;
+          continue;
+        } catch (const std::exception& e) {
+          util::log_warn("sweep: {}: {}; running it again", report.string(), e.what());
+        }
+      }
       std::error_code ec;
       // A report left by an earlier sweep is not this run's.
-      fs::remove(paths_of(o.out, i, o.scenarios, detector).report, ec);
+      fs::remove(report, ec);
       queue.push_back({i, detector});
     }
+  }
+  if (o.resume) {
+    util::log_info("sweep: resuming: {} runs kept from their reports, {} to run", kept,
+                   queue.size());
   }
 
   util::log_info(
@@ -139,7 +181,6 @@ std::size_t run_sweep(const SweepOptions& o) {
       indices.size(), o.shard, o.shards, o.scenarios, o.seed, fmt::join(o.detectors, " and "),
       queue.size(), jobs);
   const auto start = std::chrono::steady_clock::now();
-  std::vector<Row> rows;
   std::list<Running> running;
   std::size_t next = 0;
   std::size_t done = 0;

@@ -660,17 +660,22 @@ TEST(Sweep, AProgramThatCannotStartIsARowPerScenario) {
   }
 }
 
+// Whether a running sweep reports `progress` on standard error within a minute.
+bool wait_for_progress(tactile::testing::Process& p, const std::string& progress) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (p.err_so_far().find(progress) == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline && p.running()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return p.err_so_far().find(progress) != std::string::npos;
+}
+
 TEST(Sweep, SigintStopsTheChildrenAndWritesWhatIsDone) {
   TempDir dir;
   tactile::testing::Process p({kRig, "--sweep", "6", "--seed", "11", "--max-sim-time", "6",
                                "--jobs", "1", "--out", (dir / "out").string(), "--detectors",
                                "paper"});
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (p.err_so_far().find("1/6 runs done") == std::string::npos &&
-         std::chrono::steady_clock::now() < deadline && p.running()) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  ASSERT_NE(p.err_so_far().find("1/6 runs done"), std::string::npos) << p.err_so_far();
+  ASSERT_TRUE(wait_for_progress(p, "1/6 runs done")) << p.err_so_far();
   p.signal(SIGINT);
   const ProcessResult r = p.wait(std::chrono::seconds(30));
   ASSERT_FALSE(r.timed_out);
@@ -686,12 +691,60 @@ TEST(Sweep, SigintStopsTheChildrenAndWritesWhatIsDone) {
   EXPECT_TRUE(fs::exists(dir / "out" / "scenarios" / "00005.yaml"));
 }
 
+TEST(Sweep, ResumeRunsOnlyTheRunsAStopLeftWithoutAReportToTheSameTable) {
+  TempDir dir;
+  const std::vector<std::string> args{kRig,
+                                      "--sweep",
+                                      "4",
+                                      "--seed",
+                                      "11",
+                                      "--max-sim-time",
+                                      "6",
+                                      "--detectors",
+                                      "paper",
+                                      "--out",
+                                      (dir / "cut").string()};
+  tactile::testing::Process p(args);
+  ASSERT_TRUE(wait_for_progress(p, "2/4 runs done")) << p.err_so_far();
+  p.signal(SIGTERM);
+  ASSERT_EQ(p.wait(std::chrono::seconds(30)).exit_code, 0);
+  ASSERT_TRUE(sweep::parse_info(read(dir / "cut" / "sweep.json"), "sweep.json").stopped);
+  const std::size_t done = sweep::parse_csv(read(dir / "cut" / "sweep.csv"), "sweep.csv").size();
+  ASSERT_GE(done, 2U);
+  ASSERT_LT(done, 4U) << "the stop came too late to leave a run to resume";
+
+  std::vector<std::string> resume(args.begin() + 1, args.end());
+  resume.push_back("--resume");
+  const ProcessResult resumed = rig(resume);
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find(fmt::format("resuming: {} runs kept from their reports, {} to run",
+                                         done, 4 - done)),
+            std::string::npos)
+      << resumed.err;
+  EXPECT_FALSE(sweep::parse_info(read(dir / "cut" / "sweep.json"), "sweep.json").stopped);
+  const ProcessResult whole =
+      rig({"--sweep", "4", "--seed", "11", "--max-sim-time", "6", "--detectors", "paper", "--jobs",
+           "2", "--out", (dir / "whole").string()});
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  EXPECT_EQ(read(dir / "cut" / "sweep.csv"), read(dir / "whole" / "sweep.csv"));
+  EXPECT_EQ(read(dir / "cut" / "summary.md"), read(dir / "whole" / "summary.md"));
+
+  // The reports of another sweep's scenario are not kept: scenario 0 of seed 12 runs again.
+  const ProcessResult other =
+      rig({"--sweep", "4", "--seed", "12", "--max-sim-time", "6", "--detectors", "paper", "--shard",
+           "1/4", "--resume", "--out", (dir / "cut").string()});
+  ASSERT_EQ(other.exit_code, 0) << other.err;
+  EXPECT_NE(other.err.find("resuming: 0 runs kept from their reports, 1 to run"), std::string::npos)
+      << other.err;
+}
+
 TEST(Sweep, UsageErrorsExit2) {
   TempDir dir;
   for (const auto& args : std::vector<std::vector<std::string>>{
            {"--sweep", "3"},                                                   // no --out
            {"--sweep", "3", "--out", (dir / "x").string(), "--shard", "4/3"},  // K > N
            {"--sweep", "3", "--out", (dir / "x").string(), "--shard", "1-3"},
+           {"--sweep-merge", (dir / "x").string(), "--out", (dir / "y").string(), "--resume"},
            {"--sweep", "0", "--out", (dir / "x").string()},
            {"--lockstep"},  // no --scenario
            {"--sweep", "3", "--out", (dir / "x").string(), "--detectors", "paper,wavelet"},

@@ -134,6 +134,9 @@ struct SweepOptions {
   // Each scenario runs once per slip detector named here (control::to_string names), with
   // `--slip-detector NAME`: one row per scenario and detector.
   std::vector<std::string> detectors{"paper", "field", "learned"};
+  // Keep the runs whose reports `out` holds from an earlier run of this sweep (one a signal or a
+  // kill cut short; its scenario file must be this draw's) and run only the others.
+  bool resume = false;
   // The program run per scenario as PROGRAM --lockstep --scenario FILE --report FILE; empty: this
   // rig (/proc/self/exe).
   std::string child_program;
@@ -142,6 +145,14 @@ struct SweepOptions {
 // The scenario indices of shard K of N: i with i % N == K - 1 (interleaved, so the shards get
 // alike shares of every kind of scenario).
 std::vector<std::uint64_t> shard_indices(std::uint64_t scenarios, int shard, int shards);
+
+// "K/N" (1 <= K <= N) as {K, N}: --shard of rig --sweep and slip_train. Throws
+// std::invalid_argument saying what is wrong with `text`.
+struct Shard {
+  int shard = 1;
+  int shards = 1;
+};
+Shard parse_shard(const std::string& text);
 
 // Runs the sweep (or its shard) and writes DIR/scenarios/, DIR/reports/, DIR/logs/, sweep.json,
 // sweep.csv, summary.md and sweep.png; prints the summary on standard output and the progress on
