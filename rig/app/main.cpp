@@ -103,6 +103,11 @@ int run(int argc, char** argv) {
                  "real time: hold the arm after this long without hand_node (s)")
       ->capture_default_str()
       ->check(CLI::Range(0.005, 10.0));
+  app.add_option(
+         "--late-every", rt.late_every,
+         "real time, for tests: leave every Nth frame unrendered, as if the rig ran late, "
+         "so the cameras send the image before it again (the truth's resend path; 0: never)")
+      ->capture_default_str();
   app.add_option("--wait-for-hand", rt.wait_for_hand_s,
                  "real time: give up when no hand_node speaks within this (s)")
       ->capture_default_str();
