@@ -27,10 +27,15 @@ int run(int argc, char** argv) {
   app.add_option("--config", config_path, "configuration file (tactile-hand/1 YAML)")->required();
   app.add_option("--subscribe", subscribe,
                  "sensor_node endpoint to subscribe to (repeatable; replaces the file's list)")
-      ->allow_extra_args(false);
+      ->allow_extra_args(false)
+      ->check(tactile::cli::non_empty());
   app.add_option("--arm", arm,
-                 "arm controller endpoint (default tcp://127.0.0.1:5556 or the file's)");
-  app.add_option("--events", events, "publish events on this endpoint (e.g. tcp://*:5558)");
+                 "arm controller endpoint (default tcp://127.0.0.1:5556 or the file's)")
+      ->check(tactile::cli::non_empty());
+  const CLI::Option* events_opt = app.add_option(
+      "--events", events,
+      "publish events on this endpoint (e.g. tcp://*:5558); \"\" publishes none, whatever the "
+      "file says");
   tactile::cli::add_log_level(app, log_level);
   return tactile::cli::run(app, argc, argv, [&] {
     tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
@@ -40,7 +45,7 @@ int run(int argc, char** argv) {
       tactile::util::log_warn("{}", w);
     if (!subscribe.empty()) cfg.subscribe = subscribe;
     if (!arm.empty()) cfg.arm = arm;
-    if (!events.empty()) cfg.events = events;
+    tactile::cli::override_if_given(events_opt, events, cfg.events);
     tactile::util::log_info("{}", tactile::control::describe_controller(cfg.controller));
     // Before any thread exists, so that ZeroMQ's threads inherit it.
     tactile::util::apply_realtime_scheduling(cfg.realtime, config_path + ": realtime");

@@ -37,11 +37,15 @@ int run(int argc, char** argv) {
       "publishes TactileFrames over ZeroMQ."};
   app.add_option("--config", config_path, "configuration file (tactile-sensor/1 YAML)");
   app.add_option("--camera", camera,
-                 "one-camera case: IPv4 address or Aravis device id of the camera");
-  app.add_option("--calibration", calibration, "one-camera case: calibration file of its sensor");
+                 "one-camera case: IPv4 address or Aravis device id of the camera")
+      ->check(tactile::cli::non_empty());
+  app.add_option("--calibration", calibration, "one-camera case: calibration file of its sensor")
+      ->check(tactile::cli::non_empty());
   app.add_option("--reference", reference,
-                 "one-camera case: use this no-load frame (PGM) instead of capturing one");
-  app.add_option("--publish", publish, "PUB endpoint (default tcp://*:5555 or the file's)");
+                 "one-camera case: use this no-load frame (PGM) instead of capturing one")
+      ->check(tactile::cli::non_empty());
+  app.add_option("--publish", publish, "PUB endpoint (default tcp://*:5555 or the file's)")
+      ->check(tactile::cli::non_empty());
   app.add_option("--state-dir", state_dir,
                  "folder for what sensor_node keeps between runs (relative reference_cache paths); "
                  "default: the "

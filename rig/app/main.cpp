@@ -78,7 +78,8 @@ int run(int argc, char** argv) {
   app.add_option(
          "--cameras", cameras,
          "real time: the two cameras' IPv4 addresses, left,right (default 127.0.0.2,127.0.0.3)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(tactile::cli::non_empty());
   app.add_option("--camera-netns", rt.camera_netns,
                  "real time: serve the cameras inside this network namespace (a name `ip netns "
                  "add` made, or a path such as /proc/PID/ns/net): behind a link of their own, "
@@ -94,13 +95,19 @@ int run(int argc, char** argv) {
   app.add_option(
          "--observe-frames", observe_frames,
          "real time: sensor_node endpoint to score (repeatable; default tcp://127.0.0.1:5555)")
-      ->allow_extra_args(false);
+      ->allow_extra_args(false)
+      ->check(tactile::cli::non_empty());
   app.add_option("--observe-events", rt.observe_events, "real time: hand_node's event endpoint")
       ->capture_default_str();
   app.add_option("--deadman", rt.deadman_s,
                  "real time: hold the arm after this long without hand_node (s)")
       ->capture_default_str()
       ->check(CLI::Range(0.005, 10.0));
+  app.add_option(
+         "--late-every", rt.late_every,
+         "real time, for tests: leave every Nth frame unrendered, as if the rig ran late, "
+         "so the cameras send the image before it again (the truth's resend path; 0: never)")
+      ->capture_default_str();
   app.add_option("--wait-for-hand", rt.wait_for_hand_s,
                  "real time: give up when no hand_node speaks within this (s)")
       ->capture_default_str();
@@ -145,9 +152,10 @@ int run(int argc, char** argv) {
                         ->excludes(sweep_opt);
   std::string slip_detector;
   app.add_option(
-      "--slip-detector", slip_detector,
-      "the controller's slip detector, paper, field or learned, overriding the scenario's "
-      "controller.slip_detector (docs/slip.md)");
+         "--slip-detector", slip_detector,
+         "the controller's slip detector, paper, field or learned, overriding the scenario's "
+         "controller.slip_detector (docs/slip.md)")
+      ->check(tactile::cli::non_empty());
   app.add_option("--detectors", sweep.detectors,
                  "sweep: run every scenario once with each of these slip detectors, separated by "
                  "commas")
@@ -203,7 +211,8 @@ int run(int argc, char** argv) {
       }
       tactile::util::install_stop_handlers();
       tactile::rig::sweep::run_sweep(sweep);
-      return 0;
+      // Cut short by a signal: the partial table is written, and the status says it is partial.
+      return tactile::util::interrupted_exit_status();
     }
     if (scenario_path.empty()) throw tactile::cli::UsageError("--scenario is required");
     if (!slip_detector.empty() && !tactile::control::slip_detector_from_string(slip_detector)) {

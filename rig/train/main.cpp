@@ -269,7 +269,10 @@ int main(int argc, char** argv) {
       threads.emplace_back(worker);
     for (auto& t : threads)
       t.join();
-    if (tactile::util::stop_requested()) throw std::runtime_error("stopped before training");
+    if (tactile::util::stop_requested()) {
+      std::fprintf(stderr, "slip_train: stopped before training: nothing written\n");
+      return tactile::util::interrupted_exit_status();
+    }
     for (const Run& r : runs) {
       if (!r.error.empty())
         throw std::runtime_error(fmt::format("seed {} scenario {}: {}", r.seed, r.index, r.error));

@@ -216,6 +216,16 @@ void Pipeline::publish_stats() {
       cfg_.sensor_id, c.frames, c.completed, c.incomplete, c.frames_lost, c.underruns, m50, mmax);
 }
 
+// A camera whose images the calibration does not fit never will: a configuration error, said once
+// with both sizes, not a refusal on every frame.
+static std::string wrong_size(const CameraConfig& cfg, const ImageView& image) {
+  return fmt::format(
+      "the camera sends {}x{} images (at x {} y {}); the calibration {} is for {}x{} images: "
+      "calibrate this camera, or give it the calibration's image size",
+      image.width, image.height, image.origin_x, image.origin_y, cfg.calibration_path.string(),
+      cfg.calibration.width, cfg.calibration.height);
+}
+
 void Pipeline::run(const std::atomic<bool>& stop) noexcept {
   try {
     const bool have_reference = load_reference();
@@ -265,6 +275,8 @@ void Pipeline::run(const std::atomic<bool>& stop) noexcept {
           reference_in_use();
           forgot_pending_ = true;
           save_reference();
+        } else if (r.status == ReferenceStatus::kWrongSize) {
+          throw std::runtime_error(wrong_size(cfg_, frame.image));
         } else if (r.status != ReferenceStatus::kCollecting) {
           util::log_warn("{}: reference {} (element {}, excess G {:.0f}); starting again",
                          cfg_.sensor_id, to_string(r.status), r.element_id, r.value);
@@ -283,6 +295,8 @@ void Pipeline::run(const std::atomic<bool>& stop) noexcept {
         publish(frame, v1::FRAME_STATUS_COMPLETE, us);
         if (raw_frames_) publish_raw(frame, sequence_ - 1, forgot_pending_);
         forgot_pending_ = false;
+      } else if (ms == MeasureStatus::kWrongSize) {
+        throw std::runtime_error(wrong_size(cfg_, frame.image));
       } else {
         ++counters_.not_measured;
         publish(frame, v1::FRAME_STATUS_WRONG_FORMAT, us);

@@ -46,7 +46,7 @@ int run(const Options& opt) {
       in, [&](std::string_view bytes) { out.write(bytes); }, eo);
   if (result.stopped) {
     tactile::util::log_info("stopped after {} records: {} not written", result.records, opt.out);
-    return 0;  // `out` removes its temporary file
+    return tactile::util::interrupted_exit_status();  // `out` removes its temporary file
   }
   if (result.end == tactile::recording::ReadStatus::kCorrupt) {
     std::fprintf(stderr, "tactile_mcap: %s (nothing written)\n", in.problem().c_str());

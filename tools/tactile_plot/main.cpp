@@ -85,7 +85,7 @@ int run(const Options& opt) {
   while ((s = reader.next(rec)) == ReadStatus::kRecord) {
     if (tactile::util::stop_requested()) {
       tactile::util::log_info("stopped before drawing");
-      return 0;
+      return tactile::util::interrupted_exit_status();
     }
     data.add(rec);
     if ((++n & 1023) == 0 && tactile::util::monotonic_ns() >= next_progress) {

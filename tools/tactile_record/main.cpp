@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <ctime>
+#include <filesystem>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -225,14 +226,15 @@ int run(Options opt) {
   }
   // Stopped by a signal: what had already arrived is part of the run. A recorder that fell
   // behind (a loaded machine, a slow disk) holds seconds of it in its queues, and the end of a
-  // run (the publishers stopped first, as run-system does) would otherwise be lost. Bounded:
-  // publishers that still send cannot keep it for longer than kDrainLimit.
+  // run (the publishers stopped first, as run-system does) would otherwise be lost. Only what is
+  // queued: no receive waits, so publishers that go on sending end it as soon as it has caught up
+  // (within a second, not after kDrainLimit). kDrainLimit bounds a publisher faster than the disk.
   if (code == 0 && tactile::util::stop_requested()) {
     constexpr std::int64_t kDrainLimit = 10'000'000'000;  // ns
     const std::int64_t drain_end = tactile::util::monotonic_ns() + kDrainLimit;
     const std::uint64_t before = received;
     while (tactile::util::monotonic_ns() < drain_end &&
-           sources.receive(m, std::chrono::milliseconds(20))) {
+           sources.receive(m, std::chrono::milliseconds(0))) {
       if (!keep(m)) {
         code = 1;
         break;
@@ -246,6 +248,16 @@ int run(Options opt) {
   if (code != 0 && !writer.error().empty()) {
     tactile::util::log_error("{}", writer.error());
     std::fprintf(stderr, "tactile_record: %s\n", writer.error().c_str());
+  }
+  // A recording with an end of its own (--duration, --count) cut short by a signal is partial:
+  // 128 + the signal's number, after what it has is written (docs/reliability.md#signals).
+  if (code == 0 && (opt.duration_s > 0 || opt.count > 0))
+    code = tactile::util::interrupted_exit_status();
+  // A run that failed before it recorded anything leaves no header-only log behind.
+  if (code != 0 && writer.records() == 0) {
+    std::error_code ec;
+    if (std::filesystem::remove(opt.output, ec))
+      tactile::util::log_info("nothing recorded: removed {}", opt.output);
   }
   const double seconds = static_cast<double>(tactile::util::monotonic_ns() - start) * 1e-9;
   tactile::util::log_info(

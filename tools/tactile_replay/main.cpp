@@ -84,7 +84,7 @@ int info(const Options& opt) {
   tactile::recording::ReadProgress progress(r);
   ReadStatus s;
   while ((s = r.next(rec)) == ReadStatus::kRecord) {
-    if (tactile::util::stop_requested()) return 0;
+    if (tactile::util::stop_requested()) return tactile::util::interrupted_exit_status();
     if (n == 0) first = rec.receive_time_ns();
     last = rec.receive_time_ns();
     ++counts[rec.topic()];
@@ -128,7 +128,7 @@ int remeasure(const Options& opt) {
   while ((s = r.next(rec)) == ReadStatus::kRecord) {
     if (tactile::util::stop_requested()) {
       tactile::util::log_info("stopped after {} records", n);
-      return 0;
+      return tactile::util::interrupted_exit_status();
     }
     rm.add(rec);
     progress.tick(++n);
@@ -198,7 +198,7 @@ int play(const Options& opt) {
   tactile::util::log_info("publishing on {}{}", player.endpoint(), security ? " (CURVE)" : "");
   if (opt.wait_subscriptions > 0) {
     if (!player.wait_for_subscribers()) {
-      if (tactile::util::stop_requested()) return 0;
+      if (tactile::util::stop_requested()) return tactile::util::interrupted_exit_status();
       throw std::runtime_error(fmt::format("no {} subscriptions within {} s (got {})",
                                            opt.wait_subscriptions, opt.wait_timeout_s,
                                            player.subscriptions()));
@@ -261,7 +261,9 @@ int play(const Options& opt) {
   tactile::util::log_info("replayed {} messages in {:.2f} s{}", sent,
                           static_cast<double>(tactile::util::monotonic_ns() - start) * 1e-9,
                           stopped ? " (stopped)" : "");
-  if (stopped || s == ReadStatus::kRecord) return 0;
+  // Cut short by a signal before the log's end: 128 + its number (docs/reliability.md#signals).
+  if (stopped) return tactile::util::interrupted_exit_status();
+  if (s == ReadStatus::kRecord) return 0;
   return report_end(s, r);
 }
 

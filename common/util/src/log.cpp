@@ -8,12 +8,17 @@
 #include <stdexcept>
 #include <string>
 
+#include "tactile/util/repeat_limiter.hpp"
+
 namespace tactile::util {
 namespace {
 
 std::atomic<LogLevel> g_level{LogLevel::kInfo};
 std::mutex g_mutex;
 std::string g_program = "tactile";
+// Warnings and errors repeat at most once a second, counted in between (a fault met on every
+// frame would otherwise fill the log; docs/tools.md).
+RepeatLimiter g_repeats;
 
 const char* level_name(LogLevel l) {
   switch (l) {
@@ -67,9 +72,18 @@ void log_line(LogLevel level, std::string_view message) {
   char stamp[32];
   std::strftime(stamp, sizeof stamp, "%H:%M:%S", &tm);
   std::lock_guard lock(g_mutex);
-  std::fprintf(stderr, "%s.%03lldZ %s %s: %.*s\n", stamp, static_cast<long long>(ms),
+  std::string repeated;
+  if (level >= LogLevel::kWarn) {
+    const std::int64_t steady_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                       std::chrono::steady_clock::now().time_since_epoch())
+                                       .count();
+    const RepeatLimiter::Decision d = g_repeats.offer(message, steady_ns);
+    if (!d.write) return;
+    repeated = repeated_suffix(d.held_back);
+  }
+  std::fprintf(stderr, "%s.%03lldZ %s %s: %.*s%s\n", stamp, static_cast<long long>(ms),
                g_program.c_str(), level_name(level), static_cast<int>(message.size()),
-               message.data());
+               message.data(), repeated.c_str());
   std::fflush(stderr);
 }
 

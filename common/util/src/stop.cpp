@@ -9,9 +9,12 @@ namespace tactile::util {
 namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
+volatile std::sig_atomic_t g_signal = 0;
 
-void on_signal(int) {
-  if (g_stop) _exit(130);
+void on_signal(int sig) {
+  // The second signal: the program did not finish stopping, so it ends now (make, ninja, docker).
+  if (g_signal != 0) _exit(128 + sig);
+  g_signal = sig;
   g_stop = 1;
 }
 
@@ -32,6 +35,12 @@ bool stop_requested() {
 }
 void request_stop() {
   g_stop = 1;
+}
+int stop_signal() {
+  return g_signal;
+}
+int interrupted_exit_status() {
+  return g_signal != 0 ? 128 + g_signal : 0;
 }
 
 }  // namespace tactile::util

@@ -561,6 +561,12 @@ RealtimeResult RealtimeRun::run() {
       frame_ = static_cast<std::uint64_t>((now + lead_ns_) / period_ns_) + 1;
       continue;
     }
+    if (opt_.late_every > 0 && frame_ % opt_.late_every == 0) {
+      // Late on purpose (--late-every): the same resend as above, on every run.
+      ++c_.late_renders;
+      ++frame_;
+      continue;
+    }
     render_frame(send_ns);  // the world at the instant the camera sends the frame
     const std::int64_t after = util::realtime_ns();
     if (!answer_arm(after) || ended_after_frame(after)) break;

@@ -5,6 +5,7 @@
 // scripts and the Python reader, so a new program is checked without editing this file.
 // Also: a misspelt key in each program's configuration fails its start, naming the closest key.
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <algorithm>
 #include <chrono>
@@ -12,6 +13,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "process.hpp"
@@ -290,6 +292,58 @@ TEST_F(MisspeltKey, RigInLockstepNamesItsSlipDetectorAndGrip) {
                                "\"grip\": \"paper\"\n  }\n}"),
             std::string::npos)
       << written.str();
+}
+
+// An empty value on the command line is never taken for "not given": it clears the file's value
+// where empty means something (hand_node's --events: no events publisher) and is a usage error
+// naming the option elsewhere (docs/tools.md, "Exit status").
+TEST_F(MisspeltKey, AnEmptyEventsEndpointClearsHandNodesFile) {
+  for (const char* f : {"left.yaml", "right.yaml"})
+    fs::copy_file(kSource / "docker" / "config" / f, dir_ / f);
+  const std::string events = "ipc://" + (dir_ / "events").string();
+  write("hand_node.yaml",
+        "format: tactile-hand/1\n"
+        "fingertips:\n"
+        "  - {sensor_id: left, calibration: left.yaml}\n"
+        "  - {sensor_id: right, calibration: right.yaml}\n"
+        "events: " +
+            events + "\n");
+  Process hand({TACTILE_HAND_NODE_PATH, "--config", (dir_ / "hand_node.yaml").string(),
+                "--subscribe", "ipc://" + (dir_ / "sensors").string(), "--arm",
+                "ipc://" + (dir_ / "arm").string(), "--events", ""});
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (hand.err_so_far().find("subscribing to") == std::string::npos && hand.running() &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  hand.signal(SIGTERM);
+  const ProcessResult r = hand.wait(std::chrono::seconds(20));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("subscribing to"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("events on"), std::string::npos) << r.err;
+}
+
+TEST_F(MisspeltKey, AnEmptyValueThatMeansNothingIsAUsageError) {
+  const std::string scenario = (kSource / "tests" / "data" / "scenarios" / "quick.yaml").string();
+  const std::string calibration = (kSource / "docker" / "config" / "left.yaml").string();
+  const std::string hand = (kSource / "docker" / "config" / "hand_node.yaml").string();
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases{
+      {"--arm", {TACTILE_HAND_NODE_PATH, "--config", hand, "--arm", ""}},
+      {"--subscribe", {TACTILE_HAND_NODE_PATH, "--config", hand, "--subscribe", ""}},
+      {"--camera", {TACTILE_SENSOR_NODE_PATH, "--camera", "", "--calibration", calibration}},
+      {"--publish",
+       {TACTILE_SENSOR_NODE_PATH, "--camera", "127.0.0.201", "--calibration", calibration,
+        "--publish", ""}},
+      {"--slip-detector",
+       {TACTILE_RIG_PATH, "--lockstep", "--scenario", scenario, "--slip-detector", ""}},
+      {"--cameras", {TACTILE_RIG_PATH, "--scenario", scenario, "--cameras", ""}},
+  };
+  for (const auto& [option, argv] : cases) {
+    const ProcessResult r = start(argv);
+    EXPECT_EQ(r.exit_code, 2) << option << ": " << r.err;
+    EXPECT_NE(r.err.find(option), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("must not be empty"), std::string::npos) << r.err;
+  }
 }
 
 }  // namespace

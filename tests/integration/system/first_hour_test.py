@@ -6,6 +6,9 @@ README gives. One step per ctest test:
     first_hour_test.py read LOG      python3 -m tactile_reader LOG
     first_hour_test.py mcap LOG      tactile_mcap LOG OUT.mcap, read back by @mcap/core under Node
     first_hour_test.py plot LOG      tactile_plot LOG -o DIR
+    first_hour_test.py install SCRIPT  scripts/install-deps --list (the demo's install, without
+                                     --test) holds python3 and every Debian package the Python
+                                     reader imports (tactile_reader._deps.DEBIAN_PACKAGES)
 
 Environment: PYTHONPATH (BUILD/tools/python), TACTILE_MCAP, TACTILE_PLOT, TACTILE_MCAP_CHECK
 (tests/integration/tools/mcap/check_mcap.mjs). The mcap step exits 77 (ctest: skipped) only when
@@ -112,10 +115,24 @@ def step_plot(log):
     print(f"plot: {', '.join(drawn)}")
 
 
+def step_install(script):
+    from tactile_reader._deps import DEBIAN_PACKAGES
+
+    listed = set(run(["bash", script, "--list"]).split())
+    missing = sorted(({"python3"} | set(DEBIAN_PACKAGES.values())) - listed)
+    if missing:
+        fail(f"{script} (the demo's install) leaves out {', '.join(missing)}, which "
+             "'python3 -m tactile_reader' needs")
+    print(f"install: {', '.join(sorted(DEBIAN_PACKAGES.values()))} in the demo's install")
+
+
 def main(argv):
+    if len(argv) == 3 and argv[1] == "install":
+        step_install(argv[2])
+        return 0
     steps = {"read": step_read, "mcap": step_mcap, "plot": step_plot}
     if len(argv) != 3 or argv[1] not in steps:
-        print(f"usage: {argv[0]} read|mcap|plot LOG", file=sys.stderr)
+        print(f"usage: {argv[0]} read|mcap|plot LOG | install SCRIPT", file=sys.stderr)
         return 2
     if not os.path.isfile(argv[2]):
         fail(f"{argv[2]}: no recording (the first_hour fixture, RunSystem.*, makes it)")

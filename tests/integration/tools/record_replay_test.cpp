@@ -261,35 +261,48 @@ TEST(Replay, KeepsTheRecordedPaceScaledBySpeed) {
   }
 }
 
+// Publishes `event` on `pub` every 5 ms until the recorder writing `path` has a record on disk
+// past the log's header (it joins late: pace by polling; bounded).
+void publish_until_recorded(wire::Publisher& pub, const std::filesystem::path& path,
+                            const std::string& event) {
+  const auto deadline = std::chrono::steady_clock::now() + 20s;
+  std::uintmax_t header_size = 0;
+  while (std::chrono::steady_clock::now() < deadline) {
+    pub.send(wire::kEventTopic, wire::bytes_of(event));
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (!ec && header_size == 0) header_size = size;
+    if (!ec && size > header_size && header_size > 0) return;
+    std::this_thread::sleep_for(5ms);
+  }
+}
+
+// A signal ends a recording cleanly with what it got: status 0 when the signal is its end, 128 +
+// the signal's number when it cut a --duration short (docs/reliability.md#signals).
 TEST(Record, StopsCleanlyOnSignalsAndKeepsWhatItGot) {
   TempDir dir;
   zmq::context_t ctx;
   wire::Publisher pub(ctx, "tcp://127.0.0.1:*");
+  v1::Envelope env;
+  env.mutable_event()->set_kind(v1::EVENT_KIND_TOUCH);
+  std::string buf;
+  wire::encode(env, buf);
   for (const int sig : {SIGINT, SIGTERM}) {
-    const auto path = dir / ("sig" + std::to_string(sig) + ".tlog");
-    Process rec(
-        {TACTILE_RECORD_PATH, "-o", path.string(), pub.endpoint(), "--flush-interval", "0.05"});
-    v1::Envelope env;
-    env.mutable_event()->set_kind(v1::EVENT_KIND_TOUCH);
-    std::string buf;
-    wire::encode(env, buf);
-    // Publish until the recorder has flushed a record to disk (it joins late: pace by polling).
-    const auto deadline = std::chrono::steady_clock::now() + 20s;
-    std::uintmax_t header_size = 0;
-    while (std::chrono::steady_clock::now() < deadline) {
-      pub.send(wire::kEventTopic, wire::bytes_of(buf));
-      std::error_code ec;
-      const auto size = std::filesystem::file_size(path, ec);
-      if (!ec && header_size == 0) header_size = size;
-      if (!ec && size > header_size && header_size > 0) break;
-      std::this_thread::sleep_for(5ms);
+    for (const bool with_duration : {false, true}) {
+      const auto path =
+          dir / ("sig" + std::to_string(sig) + (with_duration ? "-duration" : "") + ".tlog");
+      std::vector<std::string> argv{TACTILE_RECORD_PATH, "-o",  path.string(), pub.endpoint(),
+                                    "--flush-interval",  "0.05"};
+      if (with_duration) argv.insert(argv.end(), {"--duration", "60"});
+      Process rec(argv);
+      publish_until_recorded(pub, path, buf);
+      rec.signal(sig);
+      const auto r = rec.wait(20s);
+      EXPECT_EQ(r.exit_code, with_duration ? 128 + sig : 0) << r.err;
+      const auto log = read_log(path);
+      EXPECT_EQ(log.end, recording::ReadStatus::kEnd);
+      EXPECT_GE(log.per_topic.at(wire::kEventTopic), 1);
     }
-    rec.signal(sig);
-    const auto r = rec.wait(20s);
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    const auto log = read_log(path);
-    EXPECT_EQ(log.end, recording::ReadStatus::kEnd);
-    EXPECT_GE(log.per_topic.at(wire::kEventTopic), 1);
   }
 }
 
@@ -306,17 +319,7 @@ TEST(Record, OnASignalItFirstWritesWhatHadAlreadyArrived) {
   env.mutable_event()->set_kind(v1::EVENT_KIND_TOUCH);
   std::string event;
   wire::encode(env, event);
-  // Subscribed once a first event is on disk (publish and poll, bounded).
-  const auto deadline = std::chrono::steady_clock::now() + 20s;
-  std::uintmax_t header_size = 0;
-  while (std::chrono::steady_clock::now() < deadline) {
-    pub.send(wire::kEventTopic, wire::bytes_of(event));
-    std::error_code ec;
-    const auto size = std::filesystem::file_size(path, ec);
-    if (!ec && header_size == 0) header_size = size;
-    if (!ec && size > header_size && header_size > 0) break;
-    std::this_thread::sleep_for(5ms);
-  }
+  publish_until_recorded(pub, path, event);
   // 60 messages of 256 KiB that compress slowly (a counter's bytes, like an image's texture).
   constexpr int kBig = 60;
   std::vector<std::uint8_t> big(256 * 1024);
@@ -349,6 +352,46 @@ void publish_while_running(wire::Publisher& pub, Process& rec) {
     pub.send(wire::kEventTopic, wire::bytes_of(buf));
     std::this_thread::sleep_for(5ms);
   }
+}
+
+// Ctrl-C while the publisher goes on sending: what is queued is written, nothing more is waited
+// for, and it ends within a second (it drained for up to 10 s before).
+TEST(Record, ASignalEndsItWithinASecondWhileThePublisherGoesOnSending) {
+  TempDir dir;
+  zmq::context_t ctx;
+  wire::Publisher pub(ctx, "tcp://127.0.0.1:*");
+  const auto path = dir / "busy.tlog";
+  Process rec(
+      {TACTILE_RECORD_PATH, "-o", path.string(), pub.endpoint(), "--flush-interval", "0.05"});
+  v1::Envelope env;
+  env.mutable_event()->set_kind(v1::EVENT_KIND_TOUCH);
+  std::string buf;
+  wire::encode(env, buf);
+  publish_until_recorded(pub, path, buf);
+  const auto signalled = std::chrono::steady_clock::now();
+  rec.signal(SIGINT);
+  publish_while_running(pub, rec);
+  const auto ended = std::chrono::steady_clock::now();
+  const auto r = rec.wait(10s);
+  EXPECT_EQ(r.exit_code, 0) << r.err;  // no --duration: a signal is its normal end
+  EXPECT_LT(ended - signalled, 1s) << r.err;
+  const auto log = read_log(path);
+  EXPECT_EQ(log.end, recording::ReadStatus::kEnd);
+  EXPECT_GE(log.per_topic.at(wire::kEventTopic), 1);
+}
+
+// Nobody publishing: it fails (silence) before it recorded anything and leaves no log behind.
+TEST(Record, FailingBeforeAnyRecordLeavesNoFile) {
+  TempDir dir;
+  zmq::context_t ctx;
+  wire::Publisher silent(ctx, "tcp://127.0.0.1:*");
+  const auto path = dir / "nothing.tlog";
+  const auto r = testing::run(
+      {TACTILE_RECORD_PATH, "-o", path.string(), silent.endpoint(), "--silence-timeout", "0.5"},
+      20s);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("nothing heard from"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(path)) << r.err;
 }
 
 TEST(Record, AnEndpointSilentForTheSilenceTimeoutEndsItNonZeroNamingThatEndpoint) {
@@ -525,7 +568,8 @@ TEST(Replay, InfoDescribesTheLogAndStopsOnSignalWhileWaiting) {
                    "tcp://127.0.0.1:*", "--wait-subscriptions", "1"});
   ASSERT_FALSE(replay_endpoint(waiting).empty());
   waiting.signal(SIGTERM);
-  EXPECT_EQ(waiting.wait(10s).exit_code, 0);
+  // Stopped before it played the log: 128 + SIGTERM (docs/reliability.md#signals).
+  EXPECT_EQ(waiting.wait(10s).exit_code, 143);
 }
 
 }  // namespace

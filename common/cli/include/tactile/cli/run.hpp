@@ -67,6 +67,22 @@ inline CLI::Option* add_log_level(CLI::App& app, std::string& level) {
       ->capture_default_str();
 }
 
+// The command line over a configuration file (hand_node, sensor_node, the rig's scenario): a value
+// given replaces the file's and one not given leaves it, and an empty value is never taken for "not
+// given". Where empty means something (hand_node's --events: no events publisher), the program
+// takes it through override_if_given; elsewhere the option takes non_empty() and "" is a usage
+// error (exit status 2) naming the option.
+inline CLI::Validator non_empty() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string { return text.empty() ? "must not be empty" : ""; }, "",
+      "non-empty");
+}
+// `configured` = `given` when `option` was on the command line, even empty.
+template <typename T>
+void override_if_given(const CLI::Option* option, const T& given, T& configured) {
+  if (option->count() > 0) configured = given;
+}
+
 // Parses the command line into `app`'s options, then runs `body` (no arguments, returns the exit
 // status, passed through). --help (and anything else CLI11 ends with status 0) prints through
 // app.exit() and returns 0 without running the body.

@@ -47,6 +47,10 @@ struct RealtimeOptions {
   // three quarters of a period: an image published before the previous send instant would go
   // out a period early.
   double render_lead_s = 0.003;
+  // A test's hook for the truth's resend path (docs/rig.md, "Joining truth and frames"): every
+  // late_every-th frame is not rendered, as if the rig ran late, so both cameras send the image
+  // before it again under a new block id. 0: never on purpose.
+  std::uint64_t late_every = 0;
   // Give up when no hand_node has spoken this long after the start.
   double wait_for_hand_s = 60.0;
   // Where to write the calibration files of the two simulated sensors (left.yaml, right.yaml);
