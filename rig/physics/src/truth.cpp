@@ -20,7 +20,9 @@ GripTruth grip_truth(const World& world, const GroundTruth& truth) {
     }
     if (g.applied_n[i] > 0) g.slide_mm = std::max(g.slide_mm, slid / g.applied_n[i]);
   }
-  g.held = touching[0] && touching[1] && cap.place == CapPlace::kFree;
+  // A cap anchored to the table (the sweep's cap_held case) rises by the anchor's stretch under a
+  // firm pull and leaves the table's contact, but the anchor holds it, not the fingers.
+  g.held = touching[0] && touching[1] && cap.place == CapPlace::kFree && !p.cap.held_to_table;
   const Vec3 a0 = world.fingertip(0).apex_world;
   const Vec3 a1 = world.fingertip(1).apex_world;
   const Vec3 squeeze{a1.x - a0.x, a1.y - a0.y, 0};  // horizontal: the wrist only turns

@@ -83,6 +83,20 @@ TEST(Lockstep, DefaultScenarioGripIsAboveTheLeastThatHolds) {
   EXPECT_EQ(by_stage, rep.recompressions);
 }
 
+// A cap held to the table (the seed-20 sweep's scenario 7) rises off it by the anchor's stretch
+// for a few frames under the grip: the anchor holds it, not the fingers, so no frame is held and
+// the grip's ratios are null.
+TEST(Lockstep, ACapAnchoredToTheTableIsNeverHeldByTheFingers) {
+  LockstepOptions o;
+  o.record_series = false;
+  const Report rep =
+      run_lockstep(load_scenario(kTestScenarios / "anchored-cap-pulled-up.yaml"), o).report;
+  EXPECT_EQ(rep.scenario_case, "cap_held");
+  EXPECT_EQ(rep.grip.held_frames, 0U);
+  EXPECT_EQ(rep.grip.cap_slide_carry_mm, 0.0);
+  EXPECT_TRUE(nlohmann::json::parse(report_json(rep)).at("grip").at("ratio_p50").is_null());
+}
+
 // A heavy cap under strong vibration (the seed-20 sweep's scenario 5, one of its 40 that
 // aborted): held on damped feelers it no longer rings, the lowering reaches the bottle before
 // the release is classified, and Phase II finds the cap where it was let go.

@@ -57,8 +57,8 @@ struct GripTruth {
   double needed_n = 0;
   // The grip applied: each fingertip's total normal force on the cap.
   std::array<double, kFingertips> applied_n{};
-  // Held by the fingers: both fingertips touch the cap and it rests on nothing (CapPlace::kFree:
-  // off the table, the bottle's neck and the thread).
+  // Held by the fingers: both fingertips touch the cap and nothing else holds it (CapPlace::kFree:
+  // off the table, the bottle's neck and the thread; and not anchored, cap.held_to_table).
   bool held = false;
   // How far the cap slid against the fingertips in the frame: per fingertip, the distance its
   // in-contact elements' tips slid over the cap, averaged with their normal forces as weights;
