@@ -25,6 +25,21 @@ double ratio(std::uint64_t part, std::uint64_t rest) {
   return part + rest > 0 ? static_cast<double>(part) / static_cast<double>(part + rest) : 1.0;
 }
 
+// The report's `grip`: the ratios are null without a held frame.
+nlohmann::ordered_json grip_json(const GripMetrics& g) {
+  using nlohmann::ordered_json;
+  const auto held = [&g](double v) { return g.held_frames > 0 ? ordered_json(v) : nullptr; };
+  return {{"ratio_p50", held(g.ratio_p50)},
+          {"ratio_p95", held(g.ratio_p95)},
+          {"ratio_max", held(g.ratio_max)},
+          {"instant_ratio_p50", held(g.instant_ratio_p50)},
+          {"instant_ratio_p95", held(g.instant_ratio_p95)},
+          {"cap_slide_carry_mm", g.cap_slide_carry_mm},
+          {"held_frames", g.held_frames},
+          {"applied_p50_N", held(g.applied_p50_N)},
+          {"steady_need_max_N", held(g.steady_need_max_N)}};
+}
+
 }  // namespace
 
 void SlipScorer::add(std::size_t i, std::size_t k, std::uint64_t frame, bool predicted, bool ideal,
@@ -281,6 +296,13 @@ std::string report_json(const Report& r) {
                     {"grip_allowed_N", r.hold.grip_allowed_n}};
   report["controller"] = {{"slip_detector", r.controller.slip_detector},
                           {"grip", r.controller.grip}};
+  report["grip"] = grip_json(r.grip);
+  ordered_json by_stage = ordered_json::object();
+  for (std::size_t p = 0; p < kPhaseCount; ++p) {
+    if (r.recompressions_by_phase[p] > 0)
+      by_stage[control::to_string(static_cast<control::Phase>(p))] = r.recompressions_by_phase[p];
+  }
+  report["recompressions_by_stage"] = std::move(by_stage);
   // Non-finite numbers are written as null; text that is not UTF-8 is replaced, not thrown on.
   return report.dump(2, ' ', false, ordered_json::error_handler_t::replace) + "\n";
 }

@@ -62,6 +62,7 @@ ScenarioRun::ScenarioRun(const Scenario& sc, const CameraParams& camera, Lockste
   rep.scenario_case = scenario_case(sc.world);
   rep.hold = hold_need(sc.world, cfg_.f2_n);
   rep.end_reason = "max_time";
+  scorer_.reserve(max_frames_ + 1);
 }
 
 bool ScenarioRun::step(int steps, double dt_s) {
@@ -89,6 +90,7 @@ const GroundTruth& ScenarioRun::take_truth(std::uint64_t frame, control::Phase p
 void ScenarioRun::score_truth(std::uint64_t frame, double t_s, const GroundTruth& truth,
                               const ControllerState& controller) {
   scorer_.add_truth(frame, t_s, truth, controller, frame_pose(world_, transport_));
+  scorer_.add_grip(t_s, grip_truth(world_, truth));
 }
 
 control::ArmMotion ScenarioRun::arm_motion(double t_s) {

@@ -87,6 +87,61 @@ void IncipientLead::finish(std::size_t d, SlipMetrics& m) const {
       std::count_if(leads.begin(), leads.end(), [](double v) { return v > 0; }));
 }
 
+void steady_need(std::span<const double> t, std::span<const double> need, double half_window_s,
+                 std::span<double> steady) {
+  // Two pointers over the ascending times; a window holds a few dozen frames, so each frame
+  // scans its own window. The nanosecond keeps a frame exactly 0.1 s away (frame / fps) in.
+  const double reach = half_window_s + 1e-9;
+  std::size_t first = 0;
+  std::size_t last = 0;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    while (t[k] - t[first] > reach)
+      ++first;
+    while (last + 1 < t.size() && t[last + 1] - t[k] <= reach)
+      ++last;
+    steady[k] = *std::max_element(need.begin() + static_cast<std::ptrdiff_t>(first),
+                                  need.begin() + static_cast<std::ptrdiff_t>(last) + 1);
+  }
+}
+
+void GripScorer::reserve(std::size_t frames) {
+  t_.reserve(frames);
+  need_.reserve(frames);
+  applied_.reserve(frames);
+  held_.reserve(frames);
+}
+
+void GripScorer::add(double t, const GripTruth& g) {
+  t_.push_back(t);
+  need_.push_back(g.needed_n);
+  applied_.push_back(*std::min_element(g.applied_n.begin(), g.applied_n.end()));
+  held_.push_back(g.held ? 1 : 0);
+  if (g.held) slide_mm_ += g.slide_mm;
+}
+
+GripMetrics GripScorer::finish() {
+  GripMetrics m;
+  m.cap_slide_carry_mm = slide_mm_;
+  std::vector<double> steady(t_.size());
+  steady_need(t_, need_, kSteadyGripHalfWindowS, steady);
+  std::vector<double> ratio, instant, applied;
+  for (std::size_t k = 0; k < t_.size(); ++k) {
+    if (held_[k] == 0) continue;
+    ratio.push_back(applied_[k] / steady[k]);
+    instant.push_back(applied_[k] / need_[k]);
+    applied.push_back(applied_[k]);
+    m.steady_need_max_N = std::max(m.steady_need_max_N, steady[k]);
+  }
+  m.held_frames = ratio.size();
+  m.ratio_p50 = nearest_rank_percentile(ratio, 0.50);
+  m.ratio_p95 = nearest_rank_percentile(ratio, 0.95);
+  m.ratio_max = nearest_rank_percentile(ratio, 1.0);
+  m.instant_ratio_p50 = nearest_rank_percentile(instant, 0.50);
+  m.instant_ratio_p95 = nearest_rank_percentile(instant, 0.95);
+  m.applied_p50_N = nearest_rank_percentile(applied, 0.50);
+  return m;
+}
+
 RunScorer::RunScorer(LockstepResult& run, const control::Config& cfg, bool record_series)
     : run_(run),
       cfg_(cfg),
@@ -326,6 +381,8 @@ void RunScorer::add_event(const control::Event& e, double t) {
       break;
     case control::EventKind::kRecompress:
       ++rep.recompressions;
+      if (const auto p = static_cast<std::size_t>(e.phase); p < kPhaseCount)
+        ++rep.recompressions_by_phase[p];
       if (e.phase == control::Phase::kTransport && !transport_snapshot_) {
         transport_snapshot_ = true;
         label = "re-compression in transport";
@@ -369,6 +426,7 @@ void RunScorer::finish(bool dropped, double sim_time_s, std::uint64_t frames) {
   slip_[1].finish(rep.slip_other);
   lead_.finish(0, rep.slip);
   lead_.finish(1, rep.slip_other);
+  rep.grip = grip_.finish();
   if (cap_stop_ && declared_tight_) {
     rep.tight_time_error_s = declared_tight_->t - cap_stop_->t;
     rep.tight_error_deg = declared_tight_->wrist_turn_deg - cap_stop_->wrist_turn_deg;

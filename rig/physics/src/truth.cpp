@@ -1,8 +1,41 @@
 #include "tactile/rig/truth.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace tactile::rig {
+
+GripTruth grip_truth(const World& world, const GroundTruth& truth) {
+  const WorldParams& p = world.params();
+  const CapState& cap = world.cap();
+  GripTruth g;
+  std::array<bool, kFingertips> touching{};
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    double slid = 0;
+    for (const ElementTruth& et : truth.fingertips[i].elements) {
+      if (!et.contact) continue;
+      touching[i] = true;
+      g.applied_n[i] += et.fz_n;
+      slid += et.fz_n * et.slip_mm;
+    }
+    if (g.applied_n[i] > 0) g.slide_mm = std::max(g.slide_mm, slid / g.applied_n[i]);
+  }
+  // A cap anchored to the table (the sweep's cap_held case) rises by the anchor's stretch under a
+  // firm pull and leaves the table's contact, but the anchor holds it, not the fingers.
+  g.held = touching[0] && touching[1] && cap.place == CapPlace::kFree && !p.cap.held_to_table;
+  const Vec3 a0 = world.fingertip(0).apex_world;
+  const Vec3 a1 = world.fingertip(1).apex_world;
+  const Vec3 squeeze{a1.x - a0.x, a1.y - a0.y, 0};  // horizontal: the wrist only turns
+  const double gap = norm(squeeze);
+  const Vec3 axis = gap > 0 ? (1.0 / gap) * squeeze : world.fingertip(0).z_f;
+  // On the thread the fingers turn the cap against its friction and, past the free turn, its
+  // rising torque.
+  const double thread_nm = cap.place == CapPlace::kThreaded
+                               ? p.bottle.free_torque_nm + std::abs(cap.thread_torque_nm)
+                               : 0.0;
+  g.needed_n = grip_needed_n(p, world.wrist_accel_actual(), axis, thread_nm);
+  return g;
+}
 
 const GroundTruth& TruthRecorder::take(World& world, std::uint64_t frame_id,
                                        double slip_threshold_mm) {

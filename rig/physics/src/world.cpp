@@ -94,12 +94,25 @@ std::array<Vec3, kElementsPerFingertip> World::element_normals() const {
   return out;
 }
 
+double grip_needed_n(const WorldParams& p, Vec3 accel_mps2, Vec3 squeeze_axis, double torque_nm) {
+  // What the fingers must apply to the cap: m (a - g), g pointing down.
+  const double m = p.cap.mass_kg;
+  const Vec3 load{m * accel_mps2.x, m * accel_mps2.y, m * (accel_mps2.z + p.gravity_mps2)};
+  // Across the squeeze, horizontally: the direction the twist's couple acts in too.
+  const Vec3 across = cross(Vec3{0, 0, 1}, squeeze_axis);
+  const double vertical = 0.5 * load.z;
+  const double horizontal = 0.5 * std::abs(dot(load, across));
+  const double couple = std::abs(torque_nm) / (2.0 * p.cap.radius_m);
+  // The fingertip whose couple adds to its horizontal share needs the most.
+  return std::hypot(vertical, horizontal + couple) / p.cap.friction;
+}
+
 HoldNeed hold_need(const WorldParams& p, double f2_n) {
   HoldNeed h;
   const ArmParams& arm = p.arm;
   const double w = 2.0 * kPi * arm.vibration_hz;
   h.peak_accel_mps2 = arm.max_accel_mps2 + w * w * arm.vibration_m;
-  h.grip_needed_n = p.cap.mass_kg * (p.gravity_mps2 + h.peak_accel_mps2) / (2.0 * p.cap.friction);
+  h.grip_needed_n = grip_needed_n(p, {0, 0, h.peak_accel_mps2}, {1, 0, 0}, 0.0);
   // The apex pressed in by F2 / k_n; each element's depth as contact_forces() takes it, with the
   // patch centred on the cap's height: along the squeeze its tip lies r_d (1 - cos theta) behind
   // the apex, across it r_d sin(theta) cos(phi), upward r_d sin(theta) sin(phi).
@@ -167,8 +180,14 @@ bool World::apply(const ArmCommand& c) noexcept {
   return true;
 }
 
+Vec3 World::wrist_accel_actual() const noexcept {
+  const double w = 2.0 * kPi * p_.arm.vibration_hz;
+  return arm_.accel_mps2 + (-w * w) * arm_.vibration_m;
+}
+
 void World::update_arm(double dt) noexcept {
   const double a = p_.arm.max_accel_mps2;
+  const Vec3 velocity_before = arm_.velocity_mps;
   if (has_move_ && !arm_.segment_done) {
     const Vec3 r = move_.target_position_m - arm_.position_m;
     const double dist = norm(r);
@@ -203,6 +222,7 @@ void World::update_arm(double dt) noexcept {
     arm_.position_m = arm_.position_m + dt * arm_.velocity_mps;
     arm_.yaw_rad += dt * arm_.yaw_rate_rps;
   }
+  arm_.accel_mps2 = (1.0 / dt) * (arm_.velocity_mps - velocity_before);
   // Vibration of the arm's servos: it grows while the arm moves and fades when it rests.
   // The arm's big joints shake in proportion to the speed they translate at; turning the
   // wrist alone does not.

@@ -37,7 +37,7 @@ void write_plot(const std::vector<Row>& rows, const SweepInfo& info,
   for (const Row& r : rows)
     by_method[r.at("method")].push_back(&r);
 
-  plot::Figure fig(1000, 2100);
+  plot::Figure fig(1000, 2600);
   fig.title(fmt::format("sweep: seed {}, {} of {} scenarios", info.seed,
                         by_method.empty() ? 0 : by_method.begin()->second.size(), info.scenarios));
   auto& slip = fig.add_panel(1.4);
@@ -63,6 +63,14 @@ void write_plot(const std::vector<Row>& rows, const SweepInfo& info,
   force.title("peak grip force (largest element F_z)").x_label("F_z [N]").y_label("scenarios");
   auto& false_slips = fig.add_panel();
   false_slips.title("false slips (element-frames)").x_label("element-frames").y_label("scenarios");
+  auto& grip = fig.add_panel();
+  grip.title("grip over the least steady grip while held, sorted (solid: median, dashed: 95th pct)")
+      .x_label("share of scenarios")
+      .y_label("ratio")
+      .x_range(0, 1)
+      .y_robust(plot::RobustRange{0.0, 1.0, 0.1});
+  auto& slide = fig.add_panel();
+  slide.title("the cap's slide in the fingers while held").x_label("mm").y_label("scenarios");
 
   std::size_t m = 0;
   for (const auto& [method, mine] : by_method) {
@@ -112,6 +120,10 @@ void write_plot(const std::vector<Row>& rows, const SweepInfo& info,
                     solid);
     false_slips.histogram(finite_values(mine, "false_slips"), 30, plot::RobustRange{0.0, 0.95, 0.1},
                           method, solid);
+    ecdf(grip, finite_values(mine, "grip_ratio_p50"), method, solid);
+    ecdf(grip, finite_values(mine, "grip_ratio_p95"), {}, {plot::palette(c), 1, 4, true, 1});
+    slide.histogram(finite_values(mine, "cap_slide_carry_mm"), 30,
+                    plot::RobustRange{0.0, 0.95, 0.1}, method, solid);
     ++m;
   }
   fig.save_png(png);

@@ -187,6 +187,10 @@ const std::vector<std::string>& columns() {
                                           "max_fz_N",
                                           "false_slips",
                                           "recompressions",
+                                          "grip_ratio_p50",
+                                          "grip_ratio_p95",
+                                          "grip_instant_ratio_p50",
+                                          "cap_slide_carry_mm",
                                           "sim_time_s",
                                           "error"};
   return c;
@@ -259,6 +263,14 @@ std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json)
   set("max_fz_N", cell(need(r, "max_fz_N")));
   set("false_slips", cell(need(slip, "false_positives")));
   set("recompressions", cell(need(r, "recompressions")));
+  // Reports from before the grip's truth have none: empty cells.
+  if (r.contains("grip")) {
+    const json& grip = r.at("grip");
+    set("grip_ratio_p50", cell(need(grip, "ratio_p50")));
+    set("grip_ratio_p95", cell(need(grip, "ratio_p95")));
+    set("grip_instant_ratio_p50", cell(need(grip, "instant_ratio_p50")));
+    set("cap_slide_carry_mm", cell(need(grip, "cap_slide_carry_mm")));
+  }
   set("sim_time_s", cell(need(need(r, "lockstep"), "sim_time_s")));
   return {row};
 }
@@ -389,12 +401,7 @@ std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info
     };
     out += fmt::format("\n## Method `{}`: {} scenarios\n\n", method, n);
     out += "| score | n | median | 5th pct | 95th pct |\n|---|---|---|---|---|\n";
-    for (const char* score :
-         {"precision", "recall", "ideal_precision", "ideal_recall", "precision_without_edges",
-          "recall_without_edges", "ideal_precision_without_edges", "ideal_recall_without_edges",
-          "incipient_lead_frames", "incipient_episodes", "incipient_detected", "tight_cycle_error",
-          "tight_time_error_s", "tight_error_deg", "max_fz_N", "false_slips", "recompressions",
-          "over_events"}) {
+    const auto score_row = [&](const char* score) {
       std::vector<double> v;
       for (const Row* r : mine) {
         const double x = r->number(score);
@@ -402,11 +409,24 @@ std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info
       }
       if (v.empty()) {
         out += fmt::format("| {} | 0 | - | - | - |\n", score);
-        continue;
+        return;
       }
       out += fmt::format("| {} | {} | {} | {} | {} |\n", score, v.size(),
                          number_text(percentile(v, 0.5)), number_text(percentile(v, 0.05)),
                          number_text(percentile(v, 0.95)));
+    };
+    for (const char* score :
+         {"precision", "recall", "ideal_precision", "ideal_recall", "precision_without_edges",
+          "recall_without_edges", "ideal_precision_without_edges", "ideal_recall_without_edges",
+          "incipient_lead_frames", "incipient_episodes", "incipient_detected", "tight_cycle_error",
+          "tight_time_error_s", "tight_error_deg", "max_fz_N", "false_slips", "recompressions",
+          "over_events"}) {
+      score_row(score);
+    }
+    // The grip against the least that holds (docs/rig.md, "The grip's truth").
+    for (const char* score :
+         {"grip_ratio_p50", "grip_ratio_p95", "grip_instant_ratio_p50", "cap_slide_carry_mm"}) {
+      score_row(score);
     }
     out += "\n| outcome | scenarios |\n|---|---|\n";
     out += fmt::format("| rig failed (a row with its exit status) | {} |\n", share(n - ran));

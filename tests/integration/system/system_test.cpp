@@ -228,6 +228,11 @@ TEST(LoopbackSystem, CompletesThePapersTask) {
             std::string::npos)
       << logs(s);
   EXPECT_EQ(r["controller"], (json{{"slip_detector", "learned"}, {"grip", "paper"}})) << r.dump();
+  // The one scorer gives the real-time run the grip's truth too (docs/rig.md, "The grip's truth"):
+  // the paper's grip holds the carried cap with more than the least that holds.
+  EXPECT_GT(r["grip"]["held_frames"].get<int>(), 0) << r.dump();
+  EXPECT_GT(r["grip"]["ratio_p50"].get<double>(), 1.0) << r.dump();
+  EXPECT_TRUE(r["recompressions_by_stage"].is_object()) << r.dump();
 }
 
 // The sweep's negative case in real time: the bottle stands away from where the controller

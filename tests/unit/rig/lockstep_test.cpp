@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -53,6 +54,47 @@ TEST(Lockstep, DefaultScenarioTellsThePapersStory) {
   // The series for the plots.
   EXPECT_EQ(r.series.frames.size(), rep.frames);
   EXPECT_FALSE(r.series.snapshots.empty());
+}
+
+// The grip's truth on the default scenario (docs/rig.md, "The grip's truth"): the paper's grip
+// holds the cap with more than the least that holds, the cap barely slides in the fingers while
+// carried, and every re-compression is counted under its stage.
+TEST(Lockstep, DefaultScenarioGripIsAboveTheLeastThatHolds) {
+  LockstepOptions o;
+  o.record_series = false;
+  const Report rep = run_lockstep(load_scenario(kDir / "default.yaml"), o).report;
+  ASSERT_TRUE(rep.completed) << rep.end_reason;
+  const GripMetrics& g = rep.grip;
+  EXPECT_GT(g.held_frames, 100U);
+  EXPECT_GT(g.ratio_p50, 1.0);
+  EXPECT_GE(g.ratio_p95, g.ratio_p50);
+  EXPECT_GE(g.ratio_max, g.ratio_p95);
+  // The instant's need is never above the steady one around it.
+  EXPECT_GE(g.instant_ratio_p50, g.ratio_p50);
+  // The carry's largest need is about the report's peak-acceleration bound.
+  EXPECT_LE(g.steady_need_max_N, 1.5 * rep.hold.grip_needed_n);
+  EXPECT_GT(g.steady_need_max_N, rep.hold.grip_needed_n / 1.5);
+  EXPECT_TRUE(std::isfinite(g.cap_slide_carry_mm));
+  EXPECT_GE(g.cap_slide_carry_mm, 0.0);
+  EXPECT_LT(g.cap_slide_carry_mm, 1.0);
+  int by_stage = 0;
+  for (const int n : rep.recompressions_by_phase)
+    by_stage += n;
+  EXPECT_EQ(by_stage, rep.recompressions);
+}
+
+// A cap held to the table (the seed-20 sweep's scenario 7) rises off it by the anchor's stretch
+// for a few frames under the grip: the anchor holds it, not the fingers, so no frame is held and
+// the grip's ratios are null.
+TEST(Lockstep, ACapAnchoredToTheTableIsNeverHeldByTheFingers) {
+  LockstepOptions o;
+  o.record_series = false;
+  const Report rep =
+      run_lockstep(load_scenario(kTestScenarios / "anchored-cap-pulled-up.yaml"), o).report;
+  EXPECT_EQ(rep.scenario_case, "cap_held");
+  EXPECT_EQ(rep.grip.held_frames, 0U);
+  EXPECT_EQ(rep.grip.cap_slide_carry_mm, 0.0);
+  EXPECT_TRUE(nlohmann::json::parse(report_json(rep)).at("grip").at("ratio_p50").is_null());
 }
 
 // A heavy cap under strong vibration (the seed-20 sweep's scenario 5, one of its 40 that
@@ -284,7 +326,9 @@ TEST(Lockstep, ReportHasTheInterfaceKeys) {
                                             "opened_in_air",
                                             "holdable",
                                             "hold",
-                                            "controller"}));
+                                            "controller",
+                                            "grip",
+                                            "recompressions_by_stage"}));
   EXPECT_EQ(j.at("case"), "normal");
   EXPECT_TRUE(j.at("negative_case_passed").is_null());
   EXPECT_EQ(j.at("opened_in_air"), false);

@@ -5,6 +5,7 @@
 
 #include "alloc_counter.hpp"
 #include "tactile/rig/optics.hpp"
+#include "tactile/rig/scoring.hpp"
 #include "tactile/rig/truth.hpp"
 #include "tactile/rig/world.hpp"
 
@@ -28,6 +29,7 @@ TEST(RigAllocation, StepTruthAndRenderAllocateNothing) {
   down.target_position_m = {0.35, -0.10, 0.01};
   down.max_speed_mps = 0.1;
   std::size_t count = 0;
+  double grip_needed = 0;
   {
     testing::AllocationScope scope;
     w.apply(down);
@@ -35,6 +37,7 @@ TEST(RigAllocation, StepTruthAndRenderAllocateNothing) {
       for (int s = 0; s < 100; ++s)
         w.step(1e-4);
       const GroundTruth& gt = truth.take(w, static_cast<std::uint64_t>(frame), 0.004);
+      grip_needed += grip_truth(w, gt).needed_n;
       for (std::size_t k = 0; k < loads.size(); ++k)
         loads[k] = {gt.fingertips[0].elements[k].fz_n + 0.1 * frame, 0.001 * frame, 0.0};
       r.render(loads, rng, img);
@@ -42,6 +45,26 @@ TEST(RigAllocation, StepTruthAndRenderAllocateNothing) {
     count = scope.count();
   }
   EXPECT_EQ(count, 0U);
+  EXPECT_GT(grip_needed, 0.0);
+}
+
+// The grip's record of each frame (the report's `grip`) allocates nothing once reserved.
+TEST(RigAllocation, GripScorerAddAllocatesNothingAfterReserve) {
+  World w{WorldParams{}};
+  TruthRecorder truth(0.04, 0.1);
+  GripScorer s;
+  s.reserve(500);
+  std::size_t count = 0;
+  {
+    testing::AllocationScope scope;
+    for (int frame = 0; frame < 500; ++frame) {
+      w.step(1e-3);
+      s.add(w.time(), grip_truth(w, truth.take(w, static_cast<std::uint64_t>(frame), 0.004)));
+    }
+    count = scope.count();
+  }
+  EXPECT_EQ(count, 0U);
+  EXPECT_EQ(s.finish().held_frames, 0U);  // the fingers never closed
 }
 
 }  // namespace

@@ -8,7 +8,9 @@
 
 #include <deque>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <numbers>
+#include <numeric>
 #include <vector>
 
 #include "tactile/rig/sensors.hpp"
@@ -289,6 +291,109 @@ TEST(Scoring, IncipientLeadCountsFramesFromTheFirstFlagInTheRunUpToGrossSlip) {
   // The other detector is scored on the same episodes of the truth.
   EXPECT_EQ(run.report.slip_other.incipient_episodes, 3U);
   EXPECT_LE(run.report.slip_other.incipient_lead_frames, 5.0);  // within a run-up
+}
+
+// The least steady grip (docs/rig.md, "The grip's truth"): each frame's is the largest need of
+// the frames within 0.1 s before and after it, the window cut at the run's ends.
+TEST(GripScoring, SteadyNeedIsTheLargestNeedWithinATenthOfASecond) {
+  const struct {
+    const char* what;
+    std::vector<double> t, need, steady;
+  } cases[] = {
+      {"real-time spacing", {0.0, 0.04, 0.09, 0.15, 0.30}, {1, 5, 2, 3, 4}, {5, 5, 5, 3, 4}},
+      {"a spike at the run's start", {0.0, 0.05, 0.10, 0.15}, {9, 1, 1, 1}, {9, 9, 9, 1}},
+      {"a spike at the run's end", {0.0, 0.05, 0.10, 0.15}, {1, 1, 1, 9}, {1, 9, 9, 9}},
+      {"frames alone", {0.0, 0.2, 0.4}, {3, 1, 2}, {3, 1, 2}},
+      {"one frame", {1.0}, {2}, {2}},
+  };
+  for (const auto& c : cases) {
+    std::vector<double> steady(c.t.size(), -1);
+    steady_need(c.t, c.need, kSteadyGripHalfWindowS, steady);
+    EXPECT_EQ(steady, c.steady) << c.what;
+  }
+  // At 100 fps (t = frame / fps, as the runner counts) a spike reaches exactly ten frames either
+  // way, 0.1 s in floating point included.
+  std::vector<double> t, need;
+  for (int n = 1; n <= 60; ++n) {
+    t.push_back(static_cast<double>(n) / 100.0);
+    need.push_back(n == 31 ? 5.0 : 1.0);
+  }
+  std::vector<double> steady(t.size());
+  steady_need(t, need, kSteadyGripHalfWindowS, steady);
+  for (int n = 1; n <= 60; ++n)
+    EXPECT_EQ(steady[n - 1], std::abs(n - 31) <= 10 ? 5.0 : 1.0) << n;
+}
+
+GripTruth grip_at(double need, std::array<double, kFingertips> applied, bool held,
+                  double slide_mm = 0) {
+  GripTruth g;
+  g.needed_n = need;
+  g.applied_n = applied;
+  g.held = held;
+  g.slide_mm = slide_mm;
+  return g;
+}
+
+// The ratios over the held frames only, the smaller fingertip's grip over the least steady grip
+// (frames 0.2 s apart: each its own window) and the instant's.
+TEST(GripScoring, RatiosArePercentilesOverTheHeldFrames) {
+  GripScorer s;
+  s.reserve(6);
+  s.add(0.0, grip_at(1, {2, 3}, false));
+  s.add(0.2, grip_at(1, {3, 3}, true));    // 3
+  s.add(0.4, grip_at(2, {4, 5}, true));    // 2
+  s.add(0.6, grip_at(1, {1.5, 1}, true));  // 1
+  s.add(0.8, grip_at(4, {8, 8}, true));    // 2
+  s.add(1.0, grip_at(0.1, {9, 9}, false));
+  const GripMetrics m = s.finish();
+  EXPECT_EQ(m.held_frames, 4U);
+  EXPECT_EQ(m.ratio_p50, 2.0);
+  EXPECT_EQ(m.ratio_p95, 3.0);
+  EXPECT_EQ(m.ratio_max, 3.0);
+  EXPECT_EQ(m.instant_ratio_p50, 2.0);
+  EXPECT_EQ(m.applied_p50_N, 3.0);
+  EXPECT_EQ(m.steady_need_max_N, 4.0);
+  // A need that peaks for one frame raises the steady need of its neighbours: the held grip of 4
+  // is 4 times the instant need but only once the steady one near the peak.
+  GripScorer v;
+  const std::vector<double> need{1, 1, 4, 1, 1, 1, 1};
+  for (std::size_t k = 0; k < need.size(); ++k)
+    v.add(0.05 * static_cast<double>(k), grip_at(need[k], {4, 4}, true));
+  const GripMetrics n = v.finish();
+  EXPECT_EQ(n.ratio_p50, 1.0);  // five frames of 7 within 0.1 s of the peak
+  EXPECT_EQ(n.ratio_max, 4.0);
+  EXPECT_EQ(n.instant_ratio_p50, 4.0);
+  EXPECT_EQ(n.instant_ratio_p95, 4.0);
+  // Nothing held: no ratio.
+  GripScorer none;
+  none.add(0.0, grip_at(1, {0, 0}, false));
+  EXPECT_EQ(none.finish().held_frames, 0U);
+}
+
+// The cap's slide: the frames' slides summed over the held frames only.
+TEST(GripScoring, SlideAddsUpOverTheHeldFrames) {
+  GripScorer s;
+  s.add(0.00, grip_at(1, {2, 2}, true, 0.25));
+  s.add(0.01, grip_at(1, {2, 2}, true, 0.5));
+  s.add(0.02, grip_at(1, {2, 2}, false, 8.0));  // falling, or on the table
+  s.add(0.03, grip_at(1, {2, 2}, true, 0.0));
+  s.add(0.04, grip_at(1, {2, 2}, true, 1.0));
+  EXPECT_EQ(s.finish().cap_slide_carry_mm, 1.75);
+}
+
+// The report's recompressions_by_stage: each re-compression under the phase it came in, summing to
+// the report's count.
+TEST(GripScoring, RecompressionsAreCountedByStage) {
+  const LockstepResult a = score_as_lockstep(synthetic_stream(400), control::Config{});
+  const auto& by = a.report.recompressions_by_phase;
+  EXPECT_EQ(by[static_cast<std::size_t>(control::Phase::kLift)], 1);
+  EXPECT_EQ(by[static_cast<std::size_t>(control::Phase::kTransport)], 1);
+  EXPECT_EQ(std::accumulate(by.begin(), by.end(), 0), a.report.recompressions);
+  const nlohmann::json j = nlohmann::json::parse(report_json(a.report));
+  EXPECT_EQ(j.at("recompressions_by_stage"), (nlohmann::json{{"LIFT", 1}, {"TRANSPORT", 1}}));
+  // The stream has no grip's truth: nothing held, the ratios null.
+  EXPECT_EQ(j.at("grip").at("held_frames"), 0);
+  EXPECT_TRUE(j.at("grip").at("ratio_p50").is_null());
 }
 
 // Fig. 10's x is the apex's position along the transport, from the cap's place to the bottle.

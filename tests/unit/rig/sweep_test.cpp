@@ -204,6 +204,32 @@ TEST(SweepTable, IncipientLeadComesFromTheReport) {
   EXPECT_NE(summary.find("| incipient_detected | 2 |"), std::string::npos) << summary;
 }
 
+// The grip's columns from the report's `grip` (docs/slip.md, the sweep's columns): empty when no
+// frame was held, and in the summary's scores.
+TEST(SweepTable, GripComesFromTheReport) {
+  tactile::rig::Report rep;
+  rep.grip.held_frames = 120;
+  rep.grip.ratio_p50 = 4.5;
+  rep.grip.ratio_p95 = 7.25;
+  rep.grip.instant_ratio_p50 = 5.5;
+  rep.grip.cap_slide_carry_mm = 0.125;
+  const sweep::Draw d = sweep::draw_scenario(1, 0);
+  const sweep::Row row = sweep::rows_from_report(d, tactile::rig::report_json(rep)).at(0);
+  EXPECT_EQ(row.number("grip_ratio_p50"), 4.5);
+  EXPECT_EQ(row.number("grip_ratio_p95"), 7.25);
+  EXPECT_EQ(row.number("grip_instant_ratio_p50"), 5.5);
+  EXPECT_EQ(row.number("cap_slide_carry_mm"), 0.125);
+  rep.grip = {};
+  const sweep::Row none = sweep::rows_from_report(d, tactile::rig::report_json(rep)).at(0);
+  EXPECT_EQ(none.at("grip_ratio_p50"), "");
+  EXPECT_EQ(none.number("cap_slide_carry_mm"), 0);
+  const std::string summary = sweep::summary_markdown({row, none}, {});
+  EXPECT_NE(summary.find("| grip_ratio_p50 | 1 | 4.5 |"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("| cap_slide_carry_mm | 2 |"), std::string::npos) << summary;
+  EXPECT_EQ(sweep::csv_text(sweep::parse_csv(sweep::csv_text({row, none}), "x.csv")),
+            sweep::csv_text({row, none}));
+}
+
 // The negative cases in the table and the summary: a `case` column from the draw, the report's
 // verdict, classifications counted per case and the failed negative scenarios listed by index.
 TEST(SweepTable, NegativeCasesAreCountedPerCaseAndTheFailedListed) {

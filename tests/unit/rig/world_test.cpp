@@ -199,6 +199,133 @@ TEST(World, HoldNeedIsTheWorldsGripAtF2AndTheLoadOverTwoMu) {
   EXPECT_FALSE(hold_need(p, f2).holdable);
 }
 
+// The least grip that holds (docs/rig.md, "The grip's truth"), per fingertip: the two fingertips
+// share the load m (a - g) and the twist's couple tau / (2 R), their tangential demands add as
+// vectors, and the grip is the larger demand over mu_s. The squeeze axis is x.
+TEST(GripTruth, LeastGripIsEachFingertipsTangentialDemandOverMu) {
+  WorldParams p;
+  p.cap.mass_kg = 0.02;
+  p.cap.radius_m = 0.015;
+  p.cap.friction = 0.8;
+  const double m = 0.02;
+  const double g = p.gravity_mps2;
+  const double mu = 0.8;
+  const struct {
+    const char* what;
+    Vec3 accel;
+    double torque;
+    double need;
+  } cases[] = {
+      {"weight only", {0, 0, 0}, 0, m * g / (2 * mu)},
+      {"accelerating up", {0, 0, 2.0}, 0, m * (g + 2.0) / (2 * mu)},
+      {"accelerating down", {0, 0, -2.0}, 0, m * (g - 2.0) / (2 * mu)},
+      {"horizontal, across the squeeze", {0, 3.0, 0}, 0, std::hypot(m * g, m * 3.0) / (2 * mu)},
+      {"horizontal, along the squeeze", {3.0, 0, 0}, 0, m * g / (2 * mu)},
+      {"twist torque", {0, 0, 0}, 0.01, std::hypot(m * g / 2, 0.01 / (2 * 0.015)) / mu},
+      {"twist torque either way", {0, 0, 0}, -0.01, std::hypot(m * g / 2, 0.01 / (2 * 0.015)) / mu},
+      {"across and twist add on one fingertip",
+       {0, 3.0, 0},
+       0.01,
+       std::hypot(m * g / 2, m * 3.0 / 2 + 0.01 / (2 * 0.015)) / mu},
+  };
+  for (const auto& c : cases) {
+    EXPECT_NEAR(grip_needed_n(p, c.accel, {1, 0, 0}, c.torque), c.need, 1e-12) << c.what;
+    // Halving mu_s doubles the need.
+    WorldParams slippery = p;
+    slippery.cap.friction = mu / 2;
+    EXPECT_NEAR(grip_needed_n(slippery, c.accel, {1, 0, 0}, c.torque), 2 * c.need, 1e-12) << c.what;
+    // Turned with the wrist: the same need about a squeeze axis along y, the load turned too.
+    const Vec3 turned{-c.accel.y, c.accel.x, c.accel.z};
+    EXPECT_NEAR(grip_needed_n(p, turned, {0, 1, 0}, c.torque), c.need, 1e-12) << c.what;
+  }
+  // hold_need's grip is this one at the peak acceleration along gravity.
+  const HoldNeed h = hold_need(p, 2.5);
+  EXPECT_EQ(h.grip_needed_n, grip_needed_n(p, {0, 0, h.peak_accel_mps2}, {1, 0, 0}, 0.0));
+}
+
+// The grip's truth of a world: on the table nothing is held; lifted, the fingertips press with
+// the sum of their elements' normal forces and the cap at rest needs its weight's grip.
+TEST(GripTruth, AGraspedCapIsHeldOnceLifted) {
+  WorldParams p;
+  TruthRecorder truth(0.04, 0.1);
+  World on_table = grasp(p, 1e-4, 0.5);
+  EXPECT_FALSE(grip_truth(on_table, truth.take(on_table, 1, 0.004)).held);
+  World w = grasp_and_lift(p, 1e-4, 0.5);
+  const GripTruth g = grip_truth(w, truth.take(w, 2, 0.004));
+  EXPECT_TRUE(g.held);
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    double sum = 0;
+    for (const Element& e : w.fingertip(i).elements)
+      sum += e.contact ? e.fn_n : 0.0;
+    EXPECT_GT(sum, 0.5);
+    EXPECT_DOUBLE_EQ(g.applied_n[i], sum);
+  }
+  EXPECT_NEAR(g.needed_n, p.cap.mass_kg * p.gravity_mps2 / (2 * p.cap.friction), 1e-9);
+  EXPECT_EQ(g.slide_mm, 0.0);  // held still: no feeler slides
+}
+
+// The slide is the cap's motion in the fingers, not the feelers' elastic give: opened slowly
+// under a lifted cap, the fingers let it slide down until it falls, and the slides of the held
+// frames add up to how far it moved down against the fingertips' apexes meanwhile (7.93 mm
+// against 7.91 mm over 36 held frames).
+TEST(GripTruth, SlideAddsUpToTheCapsMotionInTheFingers) {
+  WorldParams p;
+  p.cap.mass_kg = 0.05;
+  World w = grasp_and_lift(p, 1e-4, 0.5);
+  TruthRecorder truth(0.04, 0.1);
+  (void)truth.take(w, 0, 0.004);
+  ArmCommand open;
+  open.kind = CommandKind::kOpen;
+  open.open_speed_mps = 0.0005;
+  open.open_distance_m = 0.002;
+  w.apply(open);
+  const auto cap_below_apexes = [&w] {
+    return 0.5 * (w.fingertip(0).apex_world.z + w.fingertip(1).apex_world.z) - w.cap().position_m.z;
+  };
+  double slid_mm = 0;
+  double first = 0, last = 0;
+  bool was_held = false;
+  int held_frames = 0;
+  for (std::uint64_t frame = 1; frame <= 300; ++frame) {
+    for (int s = 0; s < 100; ++s)
+      ASSERT_TRUE(w.step(1e-4));
+    const GripTruth g = grip_truth(w, truth.take(w, frame, 0.004));
+    if (g.held) {
+      if (!was_held) first = cap_below_apexes();
+      last = cap_below_apexes();
+      slid_mm += g.slide_mm;
+      ++held_frames;
+    }
+    was_held = g.held;
+  }
+  const double moved_mm = (last - first) * 1000.0;
+  EXPECT_GT(held_frames, 10);
+  EXPECT_GT(moved_mm, 0.5) << "the cap slid down in the fingers";
+  EXPECT_NEAR(slid_mm, moved_mm, 0.02 * moved_mm) << held_frames << " held frames";
+  EXPECT_TRUE(w.cap().dropped);
+}
+
+// The wrist's actual acceleration: the arm's bounded acceleration from rest, then the
+// vibration's -(2 pi f)^2 z on top once it shakes.
+TEST(GripTruth, WristAccelerationIsTheArmsAndTheVibrations) {
+  WorldParams p;
+  p.arm.vibration_m = 0;
+  World w(p);
+  w.apply(move_to(1, p.arm.start_position_m + Vec3{0.1, 0, 0}));
+  ASSERT_TRUE(w.step(1e-3));
+  EXPECT_NEAR(w.wrist_accel_actual().x, p.arm.max_accel_mps2, 1e-9);
+  EXPECT_NEAR(w.wrist_accel_actual().z, 0.0, 1e-12);
+  WorldParams shaking;
+  World v(shaking);
+  v.apply(move_to(1, shaking.arm.start_position_m + Vec3{0.1, 0, 0}));
+  for (int k = 0; k < 300; ++k)
+    ASSERT_TRUE(v.step(1e-3));
+  const double w2 = std::pow(2 * std::numbers::pi * shaking.arm.vibration_hz, 2);
+  ASSERT_GT(std::abs(v.arm().vibration_m.z), 1e-6);
+  EXPECT_NEAR(v.wrist_accel_actual().z, -w2 * v.arm().vibration_m.z, 1e-9);
+  EXPECT_NEAR(v.wrist_accel_actual().x, v.arm().accel_mps2.x, 1e-12);
+}
+
 // The sweep's displaced bottle: the world's neck stands where the displacement puts it, not at
 // (x_m, y_m), the place the controller is given (Lockstep.DisplacedBottle... runs the task).
 TEST(World, ADisplacedBottleStandsAwayFromTheGivenPlace) {

@@ -12,6 +12,7 @@
 
 #include "tactile/calibration.hpp"
 #include "tactile/control/slip_detector.hpp"
+#include "tactile/control/types.hpp"
 #include "tactile/rig/scenario.hpp"
 #include "tactile/rig/truth.hpp"
 #include "tactile/util/percentile.hpp"
@@ -94,6 +95,26 @@ class SlipScorer {
   Counts measured_, ideal_, clear_, ideal_clear_;
 };
 
+// The grip against the least that holds (docs/rig.md, "The grip's truth"), over the frames the
+// cap is held by the fingers (GripTruth::held): the ratio of the grip applied (the smaller
+// fingertip's total normal force) to the least steady grip (the largest least grip within
+// kSteadyGripHalfWindowS), and to the instant's least grip. Nearest-rank percentiles; the
+// ratios are meaningless (written null) without a held frame.
+struct GripMetrics {
+  std::uint64_t held_frames = 0;
+  double ratio_p50 = 0;
+  double ratio_p95 = 0;
+  double ratio_max = 0;
+  double instant_ratio_p50 = 0;
+  double instant_ratio_p95 = 0;
+  double applied_p50_N = 0;       // the grip applied, per fingertip
+  double steady_need_max_N = 0;   // the largest least steady grip
+  double cap_slide_carry_mm = 0;  // the cap's slide in the fingers while held, summed
+};
+
+// The Phases, for counts per phase.
+inline constexpr std::size_t kPhaseCount = static_cast<std::size_t>(control::Phase::kAborted) + 1;
+
 // The scenario report: the fixed keys plus a few of our own (docs/rig.md).
 struct Report {
   bool completed = false;
@@ -101,6 +122,8 @@ struct Report {
   std::optional<std::string> grasp_classified;    // "grasp" / "release" on lift, or null
   std::optional<std::string> release_classified;  // "release" on lowering, or null
   int recompressions = 0;
+  // The re-compressions by the controller's phase they came in (written by phase name).
+  std::array<int, kPhaseCount> recompressions_by_phase{};
   int twist_cycles = 0;
   std::optional<int> tightened_cycle;
   std::optional<int> true_tight_cycle;
@@ -133,8 +156,10 @@ struct Report {
   bool opened_in_air = false;
   // Whether the hand can hold this cap within F2 (truth: weight, peak acceleration, mu_s).
   HoldNeed hold;
+  GripMetrics grip;
   // The controller the run scored: its slip detector and its grip (control::to_string of the
-  // scenario's controller configuration), written last as `controller`.
+  // scenario's controller configuration), written as `controller`, before `grip` and
+  // `recompressions_by_stage`.
   struct Controller {
     std::string slip_detector = "paper";
     std::string grip = "paper";

@@ -62,7 +62,7 @@ class ScenarioRun {
   // of `phase`, the phase the controller was in when the frame was taken.
   const GroundTruth& take_truth(std::uint64_t frame, control::Phase phase);
   // Scores `truth`, taken for frame `frame` at `t_s` (counted from the run's start), with the
-  // controller's state then and the hand's pose now.
+  // controller's state then, the hand's pose and the grip's truth (grip_truth) now.
   void score_truth(std::uint64_t frame, double t_s, const GroundTruth& truth,
                    const ControllerState& controller);
   // The arm's motion as its controller sees it from the reported wrist pose at `t_s`.

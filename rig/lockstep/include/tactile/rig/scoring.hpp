@@ -72,15 +72,43 @@ class IncipientLead {
   std::array<std::vector<double>, 2> leads_{};
 };
 
+// The least steady grip (docs/rig.md, "The grip's truth"): no grip follows the arm's vibration
+// frame by frame, so a frame's least steady grip is the largest least grip of the frames within
+// this much before and after it (a centred 0.2 s window, cut at the run's ends).
+inline constexpr double kSteadyGripHalfWindowS = 0.1;
+
+// Into `steady[k]`: the largest `need[j]` with |t[j] - t[k]| <= half_window_s; `t` ascending,
+// all three the same size. Allocates nothing.
+void steady_need(std::span<const double> t, std::span<const double> need, double half_window_s,
+                 std::span<double> steady);
+
+// The report's `grip` (GripMetrics) from the grip's truth of each rendered frame, in order.
+class GripScorer {
+ public:
+  // Room for this many frames: add() allocates nothing up to it.
+  void reserve(std::size_t frames);
+  void add(double t, const GripTruth& grip);
+  GripMetrics finish();
+
+ private:
+  std::vector<double> t_, need_, applied_;
+  std::vector<std::uint8_t> held_;
+  double slide_mm_ = 0;
+};
+
 class RunScorer {
  public:
   // Fills `run.report` and (with `record_series`) `run.series`; `run.calibrations` must be set.
   RunScorer(LockstepResult& run, const control::Config& cfg, bool record_series);
+  // Room for this many frames in the per-frame records (the grip's truth).
+  void reserve(std::size_t frames) { grip_.reserve(frames); }
 
   // The truth of one rendered frame (`frame` counted from the start), the controller's state
   // then and the hand's pose: a series sample, the cap and tightening facts.
   void add_truth(std::uint64_t frame, double t, const GroundTruth& truth,
                  const ControllerState& controller, const FramePose& pose);
+  // The grip's truth of the same frame, at `t` (the report's `grip`).
+  void add_grip(double t, const GripTruth& grip) { grip_.add(t, grip); }
   // One measured frame of one fingertip with the truth of the same frame (add_truth first).
   // `phase` is the controller's phase the frame was taken in: it sets the slip threshold; `arm`
   // the arm's motion the controller saw with it (control::ArmMotionEstimator on the reported
@@ -127,6 +155,7 @@ class RunScorer {
   std::optional<control::SlipDetector> recorder_;
   std::uint32_t easy_seen_ = 0;
   IncipientLead lead_;
+  GripScorer grip_;
   // The ideal sensor's readings: the truth's forces and per-frame shear displacement.
   struct IdealTip {
     std::array<ElementReading, kElementsPerFingertip> readings{};

@@ -49,6 +49,25 @@ struct GroundTruth {
   std::uint32_t twist_cycle = 0;  // the controller's cycle as the rig last saw it (caller sets)
 };
 
+// The grip's truth at one instant (docs/rig.md, "The grip's truth"), for the report's `grip`.
+struct GripTruth {
+  // The least total normal force per fingertip that holds the cap now (grip_needed_n): its
+  // weight, the wrist's actual acceleration (vibration included) and, on the thread, the
+  // thread's resisting torque.
+  double needed_n = 0;
+  // The grip applied: each fingertip's total normal force on the cap.
+  std::array<double, kFingertips> applied_n{};
+  // Held by the fingers: both fingertips touch the cap and nothing else holds it (CapPlace::kFree:
+  // off the table, the bottle's neck and the thread; and not anchored, cap.held_to_table).
+  bool held = false;
+  // How far the cap slid against the fingertips in the frame: per fingertip, the distance its
+  // in-contact elements' tips slid over the cap, averaged with their normal forces as weights;
+  // the larger of the two. The feelers' elastic deflection is not sliding and does not count.
+  double slide_mm = 0;
+};
+// From the world now and the frame's truth just taken from it (TruthRecorder::take).
+GripTruth grip_truth(const World& world, const GroundTruth& truth);
+
 // Builds the truth of each frame from the world and keeps the slip-episode state. No
 // allocation; take() clears the world's per-frame accumulators.
 class TruthRecorder {

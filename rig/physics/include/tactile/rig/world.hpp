@@ -167,6 +167,7 @@ struct CapState {
 struct ArmState {
   Vec3 position_m;  // grasp centre without vibration
   Vec3 velocity_mps;
+  Vec3 accel_mps2;  // over the last step, without vibration (the grip's truth reads it)
   double yaw_rad = 0;
   double yaw_rate_rps = 0;
   double vibration_envelope = 0;
@@ -177,6 +178,14 @@ struct ArmState {
   bool stopped = false;
 };
 
+// The least grip that holds (docs/rig.md, "The grip's truth"): the total normal force each
+// fingertip must press with for static friction (mu_s) to carry the cap at acceleration
+// `accel_mps2` against gravity and to transmit `torque_nm` about its axis. The two fingertips
+// share the cap's weight and inertia equally; the torque is a couple at the cap's radius; each
+// fingertip's tangential demand is the vector sum of its shares. The load along `squeeze_axis`
+// (a horizontal unit vector from one fingertip to the other) is carried by the normal forces.
+double grip_needed_n(const WorldParams& p, Vec3 accel_mps2, Vec3 squeeze_axis, double torque_nm);
+
 // Whether the hand can hold the cap within F2, from the world's parameters alone (docs/rig.md,
 // "Holding within F2"): the grip each fingertip needs to carry the cap's weight and its peak
 // acceleration on friction, against the grip it can press with no element beyond F2.
@@ -184,7 +193,7 @@ struct HoldNeed {
   // The wrist's acceleration bound (arm.max_accel_mps2) plus the vibration's peak,
   // (2 pi f)^2 A, both taken along gravity.
   double peak_accel_mps2 = 0;
-  // Per fingertip: m (g + peak_accel) / (2 mu_s).
+  // Per fingertip: m (g + peak_accel) / (2 mu_s), grip_needed_n() of the peak along gravity.
   double grip_needed_n = 0;
   // Per fingertip: the sum of the elements' normal forces on the cap when the most pressed one
   // (the apex) carries F2, from the dome's element layout against the cap's cylinder.
@@ -218,6 +227,9 @@ class World {
   const Fingertip& fingertip(std::size_t i) const { return tips_[i]; }
   // Grasp centre including vibration, world frame.
   Vec3 wrist_actual() const { return arm_.position_m + arm_.vibration_m; }
+  // Its acceleration: the last step's, plus the vibration's (its envelope taken as constant, as
+  // the feelers' bases move with it).
+  Vec3 wrist_accel_actual() const noexcept;
 
   // Clears the per-frame accumulators (releases, surface motion) after a frame was taken.
   void clear_frame_accumulators() noexcept;
