@@ -107,8 +107,8 @@ std::string latency_explanation(const MachineLoad& m) {
                        m.load_average_1m, m.cores);
   }
   return fmt::format(
-      "The machine was busy enough to explain the latency: {}; a late frame here is the "
-      "machine's doing, not the system's.",
+      "The machine was busy enough to explain a high latency and late frames: {}; they are "
+      "then the machine's doing, not the system's.",
       why);
 }
 
