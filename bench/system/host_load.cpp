@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
-#include <array>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -21,19 +20,6 @@ double io_full_stall_ms() {
       return std::strtod(line.c_str() + at + 6, nullptr) * 1e-3;
   }
   return std::nan("");
-}
-
-// Time the host took this machine's CPUs away (the steal column of /proc/stat), in ms summed
-// over all CPUs: a virtual machine not scheduled by its host stalls every process at once.
-double steal_ms() {
-  std::ifstream in("/proc/stat");
-  std::string cpu;
-  std::array<double, 8> f{};
-  in >> cpu;
-  for (double& x : f)
-    in >> x;
-  if (!in || cpu != "cpu") return std::nan("");
-  return f[7] * 1000.0 / static_cast<double>(::sysconf(_SC_CLK_TCK));
 }
 
 ProcStat proc_stat(pid_t pid) {
@@ -56,12 +42,6 @@ ProcStat proc_stat(pid_t pid) {
   if (i <= 15) return {};
   return {static_cast<double>(utime + stime) / static_cast<double>(::sysconf(_SC_CLK_TCK)),
           static_cast<double>(majflt)};
-}
-
-std::string load_average() {
-  std::string load;
-  std::getline(std::ifstream("/proc/loadavg"), load);
-  return load;
 }
 
 }  // namespace tactile::bench

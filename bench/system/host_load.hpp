@@ -1,9 +1,10 @@
 #pragma once
 
 // The latency benchmark's view of the machine while it measures (docs/benchmarks.md, "Latency
-// and load"): CPU and major page faults of processes from /proc/PID/stat, the host's steal time
-// and the I/O stalls of every task from /proc, the load average, and a probe thread that sees the
-// whole machine pause. Reads /proc and the clocks: the benchmark's side, not the pure analysis.
+// and load"): CPU and major page faults of processes from /proc/PID/stat, the I/O stalls of every
+// task from /proc, and a probe thread that sees the whole machine pause (the host's steal time and
+// the load average are the real-time rig's too: tactile/util/host_load.hpp). Reads /proc and the
+// clocks: the benchmark's side, not the pure analysis.
 #include <sched.h>
 #include <sys/types.h>
 
@@ -22,10 +23,6 @@ namespace tactile::bench {
 // Time during which every runnable task of this machine waited for I/O at once (the "full" line
 // of /proc/pressure/io), in ms: a stall of every process, as when evicted code pages are read back.
 double io_full_stall_ms();
-
-// Time the host took this machine's CPUs away (the steal column of /proc/stat), in ms summed
-// over all CPUs: a virtual machine not scheduled by its host stalls every process at once.
-double steal_ms();
 
 // utime + stime of a process (all its threads), in seconds, and its major page faults.
 struct ProcStat {
@@ -122,8 +119,5 @@ class StallProbe {
   std::atomic<bool> fifo_{false};
   std::jthread thread_;  // last: starts after the members it writes
 };
-
-// /proc/loadavg's line.
-std::string load_average();
 
 }  // namespace tactile::bench

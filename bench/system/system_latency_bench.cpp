@@ -62,6 +62,7 @@
 #include "tactile/plot/figure.hpp"
 #include "tactile/util/clock.hpp"
 #include "tactile/util/files.hpp"
+#include "tactile/util/host_load.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/percentile.hpp"
 #include "tactile/util/process.hpp"
@@ -207,7 +208,7 @@ Window measure_window(const Settings& s, double fps, wire::Subscriber& sub,
   Window w;
   CpuWindow cpu;
   cpu.begin(pids);
-  const double steal0 = steal_ms();
+  const double steal0 = util::steal_ms();
   const double io0 = io_full_stall_ms();
   w.begin_ns = util::realtime_ns();
   const std::int64_t m0 = util::monotonic_ns();
@@ -230,7 +231,7 @@ Window measure_window(const Settings& s, double fps, wire::Subscriber& sub,
       std::all_of(children.begin(), children.end(), [](Child* c) { return c->running(); });
   r.cpu = cpu.end(pids);
   r.major_faults = cpu.major_faults();
-  r.steal_ms = steal_ms() - steal0;
+  r.steal_ms = util::steal_ms() - steal0;
   r.io_stall_ms = io_full_stall_ms() - io0;
   w.end_ns = util::realtime_ns();
   r.window_s = static_cast<double>(w.end_ns - w.begin_ns) * 1e-9;
@@ -338,7 +339,7 @@ PipelineResult run_pipeline(const Settings& s, double fps, const std::string& ro
   std::vector<Captured> cap;
   cap.reserve(static_cast<std::size_t>(fps * 4 * (s.seconds + s.warmup_s + 30)));
 
-  r.load_at_start = load_average();
+  r.load_at_start = util::load_average();
   PipelineProcesses procs(s, prog, scenario, roi, link, dir);
   progress(fmt::format(
       "{:.0f} fps, roi {}: rig, sensor_node and hand_node started; waiting for the task", fps,
@@ -461,11 +462,11 @@ AravisResult run_aravis(const Settings& s, double fps, const std::string& roi,
     const std::map<std::string, pid_t> pids{{"receiver", ::getpid()}, {"rig", rig_p.pid()}};
     CpuWindow cpu;
     cpu.begin(pids);
-    const double steal0 = steal_ms();
+    const double steal0 = util::steal_ms();
     while (util::monotonic_ns() < begin + warmup_ns + measure_ns)
       std::this_thread::sleep_for(milliseconds(5));
     const auto pct = cpu.end(pids);
-    r.steal_ms = steal_ms() - steal0;
+    r.steal_ms = util::steal_ms() - steal0;
     r.receiver_cpu = pct.at("receiver");
     r.rig_cpu = pct.at("rig");
   }
@@ -655,11 +656,11 @@ int run(const Settings& s, const fs::path& self) {
   fs::create_directories(s.out / "logs");
   progress(fmt::format("build {}, scenario {}, output {}; {} cores, load average {}",
                        s.build_dir.string(), s.scenario.string(), s.out.string(),
-                       std::thread::hardware_concurrency(), load_average()));
+                       std::thread::hardware_concurrency(), util::load_average()));
   std::vector<RateResult> results;
   json all;
   all["machine"] = {{"cores", std::thread::hardware_concurrency()},
-                    {"load_average_at_start", load_average()}};
+                    {"load_average_at_start", util::load_average()}};
   all["settings"] = {{"seconds", s.seconds},
                      {"warmup_s", s.warmup_s},
                      {"transport_seconds", s.transport_seconds},

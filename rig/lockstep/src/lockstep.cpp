@@ -303,6 +303,14 @@ std::string report_json(const Report& r) {
       by_stage[control::to_string(static_cast<control::Phase>(p))] = r.recompressions_by_phase[p];
   }
   report["recompressions_by_stage"] = std::move(by_stage);
+  ordered_json machine = nullptr;
+  if (r.machine) {
+    machine = {{"cpu_steal_pct", r.machine->steal_pct},
+               {"load_average_1m", r.machine->load_average_1m},
+               {"cores", r.machine->cores},
+               {"explains_latency", util::explains_latency(*r.machine)}};
+  }
+  report["machine"] = std::move(machine);
   // Non-finite numbers are written as null; text that is not UTF-8 is replaced, not thrown on.
   return report.dump(2, ' ', false, ordered_json::error_handler_t::replace) + "\n";
 }

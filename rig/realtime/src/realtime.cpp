@@ -27,6 +27,7 @@
 #include "tactile/util/clock.hpp"
 #include "tactile/util/fd.hpp"
 #include "tactile/util/files.hpp"
+#include "tactile/util/host_load.hpp"
 #include "tactile/util/log.hpp"
 #include "tactile/util/stop.hpp"
 #include "tactile/wire/arm.hpp"
@@ -203,6 +204,9 @@ class RealtimeRun final : private arm::ArmBackend {
   // True when the run ends after this frame.
   bool ended_after_frame(std::int64_t now_ns);
   void finish();
+  // Records the machine's steal and load over the run and logs them beside the latency, with a
+  // sentence when they explain it (run-system prints these lines).
+  void log_latency_and_machine();
 
   const RealtimeOptions& opt_;
   RealtimeResult result_;
@@ -239,6 +243,7 @@ class RealtimeRun final : private arm::ArmBackend {
   std::vector<double> latencies_ms_;
 
   std::int64_t start_ns_ = 0;
+  util::MachineLoadWindow machine_;  // the host's steal and load over the run
   control::Phase phase_ = control::Phase::kIdle;
   std::uint32_t twist_cycle_ = 0;
   std::uint64_t frame_ = 0;
@@ -539,6 +544,7 @@ void RealtimeRun::finish() {
         nearest_rank_percentile(latencies_ms_, 0.50), nearest_rank_percentile(latencies_ms_, 0.99),
         *std::max_element(latencies_ms_.begin(), latencies_ms_.end())};
   }
+  log_latency_and_machine();
   util::log_info(
       "frames rendered {} (late {}, published late {}), scored {} (unmatched {}, incomplete {}), "
       "commands {} (refused {}), deadman trips {}, events {}, sends after their truth {}",
@@ -547,7 +553,22 @@ void RealtimeRun::finish() {
       c_.sends_after_truth);
 }
 
+void RealtimeRun::log_latency_and_machine() {
+  rep_.machine = machine_.end();
+  const std::string machine = util::describe(*rep_.machine);
+  if (rep_.latency_ms) {
+    const Report::Latency& l = *rep_.latency_ms;
+    util::log_info("latency p50 {:.1f} ms, p99 {:.1f} ms, max {:.1f} ms; machine: {}", l.p50, l.p99,
+                   l.max, machine);
+  } else {
+    util::log_info("latency not measured; machine: {}", machine);
+  }
+  const std::string why = util::latency_explanation(*rep_.machine);
+  if (!why.empty()) util::log_warn("{}", why);
+}
+
 RealtimeResult RealtimeRun::run() {
+  machine_.begin();
   start_ns_ = util::realtime_ns();
   frame_ = static_cast<std::uint64_t>((start_ns_ + lead_ns_) / period_ns_) + 1;
   first_frame_ = frame_;

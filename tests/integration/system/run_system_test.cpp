@@ -78,6 +78,11 @@ TEST(RunSystem, EndpointsReachableFromTheHostAndTheRunRecordedWithRawFrames) {
                        out + "/"),
             std::string::npos)
       << r.err;
+  // The latency beside the machine's steal and load (docs/rig.md, "The machine's load").
+  EXPECT_TRUE(std::regex_search(
+      r.err, std::regex("run-system: latency p50 [0-9.]+ ms, p99 [0-9.]+ ms, max [0-9.]+ ms; "
+                        "machine: CPU steal [0-9.]+ %, load average [0-9.]+ on [0-9]+ cores\n")))
+      << r.err;
   const auto rec = recorder.wait(30s);
   EXPECT_FALSE(rec.timed_out);
   EXPECT_EQ(rec.exit_code, 0) << rec.err;

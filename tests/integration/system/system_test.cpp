@@ -233,6 +233,14 @@ TEST(LoopbackSystem, CompletesThePapersTask) {
   EXPECT_GT(r["grip"]["held_frames"].get<int>(), 0) << r.dump();
   EXPECT_GT(r["grip"]["ratio_p50"].get<double>(), 1.0) << r.dump();
   EXPECT_TRUE(r["recompressions_by_stage"].is_object()) << r.dump();
+  // The machine over the run beside the latency (docs/rig.md, "The machine's load"), in the
+  // report and in the rig's log on the latency's line.
+  ASSERT_TRUE(r["machine"].is_object()) << r.dump();
+  EXPECT_GE(r["machine"]["cpu_steal_pct"].get<double>(), 0.0) << r.dump();
+  EXPECT_GE(r["machine"]["load_average_1m"].get<double>(), 0.0) << r.dump();
+  EXPECT_GT(r["machine"]["cores"].get<int>(), 0) << r.dump();
+  EXPECT_TRUE(r["machine"]["explains_latency"].is_boolean()) << r.dump();
+  EXPECT_NE(s.rig_result().err.find(" ms; machine: CPU steal "), std::string::npos) << logs(s);
 }
 
 // The sweep's negative case in real time: the bottle stands away from where the controller

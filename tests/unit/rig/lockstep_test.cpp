@@ -328,7 +328,9 @@ TEST(Lockstep, ReportHasTheInterfaceKeys) {
                                             "hold",
                                             "controller",
                                             "grip",
-                                            "recompressions_by_stage"}));
+                                            "recompressions_by_stage",
+                                            "machine"}));
+  EXPECT_TRUE(j.at("machine").is_null());  // lockstep: the machine's load explains nothing
   EXPECT_EQ(j.at("case"), "normal");
   EXPECT_TRUE(j.at("negative_case_passed").is_null());
   EXPECT_EQ(j.at("opened_in_air"), false);
@@ -359,6 +361,14 @@ TEST(Lockstep, ReportLatencyAndNonFiniteNumbers) {
   EXPECT_DOUBLE_EQ(latency.at("p50").get<double>(), 0.6);
   EXPECT_DOUBLE_EQ(latency.at("p99").get<double>(), 1.8);
   EXPECT_DOUBLE_EQ(latency.at("max").get<double>(), 4.0);
+  EXPECT_TRUE(j.at("machine").is_null());
+  // The machine over the run, and whether it explains the latency (steal above 5 %).
+  rep.machine = tactile::util::MachineLoad{7.5, 1.25, 2};
+  const nlohmann::json m = nlohmann::json::parse(report_json(rep)).at("machine");
+  EXPECT_EQ(m, (nlohmann::json{{"cpu_steal_pct", 7.5},
+                               {"load_average_1m", 1.25},
+                               {"cores", 2},
+                               {"explains_latency", true}}));
   EXPECT_TRUE(j.at("max_fz_N").is_null());
   EXPECT_TRUE(j.at("force_rmse_N").at("shear").is_null());
   EXPECT_TRUE(j.at("force_rmse_N").at("normal").is_number());

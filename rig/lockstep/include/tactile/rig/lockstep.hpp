@@ -15,6 +15,7 @@
 #include "tactile/control/types.hpp"
 #include "tactile/rig/scenario.hpp"
 #include "tactile/rig/truth.hpp"
+#include "tactile/util/host_load.hpp"
 #include "tactile/util/percentile.hpp"
 
 namespace tactile::rig {
@@ -140,6 +141,9 @@ struct Report {
     double max = 0;
   };
   std::optional<Latency> latency_ms;
+  // Distributed runs only: the machine over the run (its CPU steal share, load average and
+  // cores), written as `machine` after every other key, with whether it explains the latency.
+  std::optional<util::MachineLoad> machine;
   // Tightness timing (docs/rig.md): "tight" declared (the controller's CAP_TIGHT) minus the cap
   // meeting its stop in the truth (the first frame with cap_tight), in seconds, and the wrist's
   // turn in the tightening direction between the two instants (the over-tightening), in degrees.
