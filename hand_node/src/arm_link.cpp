@@ -4,7 +4,11 @@ namespace tactile::hand {
 
 void ArmLink::sent(std::int64_t now_ns, bool queued) noexcept {
   // Only what went out keeps the arm controller's deadman from tripping.
-  if (!queued) return;
+  blocked_ = !queued;
+  if (!queued) {
+    last_blocked_ns_ = now_ns;
+    return;
+  }
   sent_any_ = true;
   last_sent_ns_ = now_ns;
 }

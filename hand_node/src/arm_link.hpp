@@ -19,6 +19,9 @@ struct ArmLinkTiming {
   std::int64_t heartbeat_ns = 0;    // heartbeat_period_s: a Heartbeat when nothing went out
   std::int64_t arm_timeout_ns = 0;  // arm_timeout_s: silent this long, warn once
   std::int64_t arm_lost_ns = 0;     // arm_lost_s: silent this long, hold and exit; 0: never
+  // A Heartbeat that could not go out (no arm controller connected, or its queue full) is tried
+  // again this much later, not at every turn of the loop (0: at every turn).
+  std::int64_t retry_ns = 0;
 };
 
 class ArmLink {
@@ -60,9 +63,13 @@ class ArmLink {
 
   Due due(std::int64_t now_ns) noexcept;
   // When the next Heartbeat is due (hand_node's poll waits no longer); before anything went out,
-  // at once: hand_node announces itself.
+  // at once: hand_node announces itself. After a send that could not go out, no sooner than
+  // retry_ns after it.
   std::int64_t heartbeat_due_ns(std::int64_t now_ns) const noexcept {
-    return sent_any_ ? last_sent_ns_ + timing_.heartbeat_ns : now_ns;
+    const std::int64_t due = sent_any_ ? last_sent_ns_ + timing_.heartbeat_ns : now_ns;
+    return blocked_ && last_blocked_ns_ + timing_.retry_ns > due
+               ? last_blocked_ns_ + timing_.retry_ns
+               : due;
   }
 
   // An ArmState came: the arm controller answers (the task may start; silence counts from now).
@@ -75,6 +82,8 @@ class ArmLink {
   ArmLinkTiming timing_;
   bool sent_any_ = false;
   std::int64_t last_sent_ns_ = 0;
+  bool blocked_ = false;  // the last send could not go out
+  std::int64_t last_blocked_ns_ = 0;
   bool arm_heard_ = false;
   std::int64_t last_heard_ns_ = 0;
   bool silent_reported_ = false;

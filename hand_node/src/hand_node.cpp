@@ -29,8 +29,9 @@ HandNode::HandNode(HandConfig cfg, zmq::context_t& ctx)
       arm_(ctx, cfg_.arm, cfg_.arm_security ? &*cfg_.arm_security : nullptr),
       controller_(cfg_.controller),
       pairing_(seconds_to_ns(cfg_.pair_window_s)),
+      // A heartbeat that could not go out is tried again a tenth of a period later.
       link_({seconds_to_ns(cfg_.heartbeat_period_s), seconds_to_ns(cfg_.arm_timeout_s),
-             seconds_to_ns(cfg_.arm_lost_s)}),
+             seconds_to_ns(cfg_.arm_lost_s), seconds_to_ns(cfg_.heartbeat_period_s) / 10}),
       start_(static_cast<std::uint64_t>(cfg_.start_after_frames), kWaitingReportNs),
       freshness_(seconds_to_ns(cfg_.controller.stale_after_s)),
       period_ns_(seconds_to_ns(cfg_.control_period_s)) {

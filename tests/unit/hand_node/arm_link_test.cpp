@@ -135,6 +135,36 @@ TEST(ArmLink, AHeartbeatIsDueAtOnceAndThenWhenNothingWentOutForAPeriod) {
   run(rows);
 }
 
+// With no arm controller to take it, a Heartbeat is tried again retry_ns later, not at every turn
+// of the loop (hand_node spun at every poll, counting each attempt blocked); once one goes out,
+// the period counts again from it.
+TEST(ArmLink, AHeartbeatThatCouldNotGoOutIsTriedAgainAfterTheRetryTime) {
+  constexpr ArmLinkTiming kRetry{10 * kMs, 100 * kMs, 500 * kMs, 3 * kMs};
+  const Row rows[] = {
+      {0, In::kTurn, {.heartbeat = true}},
+      {0, In::kHeartbeatBlocked},
+      {1, In::kTurn},
+      {2, In::kTurn},
+      {3, In::kTurn, {.heartbeat = true}},
+      {3, In::kHeartbeatBlocked},
+      {5, In::kTurn},
+      {6, In::kTurn, {.heartbeat = true}},
+      {6, In::kHeartbeatSent},
+      {15, In::kTurn},
+      {16, In::kTurn, {.heartbeat = true}},
+      {16, In::kBlocked, {}, move(1)},  // a command that could not go out: the same
+      {17, In::kTurn},
+      {19, In::kTurn, {.heartbeat = true}},
+      {19, In::kHeartbeatSent},
+      {28, In::kTurn},
+      {29, In::kTurn, {.heartbeat = true}},
+  };
+  run(rows, kRetry);
+  ArmLink link(kRetry);
+  link.heartbeat_sent(5 * kMs, false);
+  EXPECT_EQ(link.heartbeat_due_ns(6 * kMs), 8 * kMs);
+}
+
 TEST(ArmLink, ThePollWaitsNoLongerThanTheNextHeartbeat) {
   ArmLink link(kTiming);
   EXPECT_EQ(link.heartbeat_due_ns(3 * kMs), 3 * kMs);  // nothing went out yet: now
