@@ -34,8 +34,8 @@ int run(int argc, char** argv) {
       ->check(tactile::cli::non_empty());
   const CLI::Option* events_opt = app.add_option(
       "--events", events,
-      "publish events on this endpoint (e.g. tcp://*:5558); \"\" publishes none, whatever the "
-      "file says");
+      "publish events on this endpoint (e.g. tcp://*:5558; several comma-separated); \"\" "
+      "publishes none, whatever the file says");
   tactile::cli::add_log_level(app, log_level);
   return tactile::cli::run(app, argc, argv, [&] {
     tactile::util::set_log_level(tactile::util::parse_log_level(log_level));

@@ -44,7 +44,9 @@ int run(int argc, char** argv) {
   app.add_option("--reference", reference,
                  "one-camera case: use this no-load frame (PGM) instead of capturing one")
       ->check(tactile::cli::non_empty());
-  app.add_option("--publish", publish, "PUB endpoint (default tcp://*:5555 or the file's)")
+  app.add_option("--publish", publish,
+                 "PUB endpoint (default tcp://*:5555 or the file's); several comma-separated, e.g. "
+                 "tcp://*:5555,ipc:///tmp/sensor.ipc")
       ->check(tactile::cli::non_empty());
   app.add_option("--state-dir", state_dir,
                  "folder for what sensor_node keeps between runs (relative reference_cache paths); "

@@ -90,7 +90,8 @@ int run(int argc, char** argv) {
       ->check(CLI::Range(576, 65500));
   app.add_option("--arm", rt.arm_endpoint, "real time: the arm controller's endpoint")
       ->capture_default_str();
-  app.add_option("--truth", rt.truth_endpoint, "real time: ground-truth PUB endpoint (empty: none)")
+  app.add_option("--truth", rt.truth_endpoint,
+                 "real time: ground-truth PUB endpoint (several comma-separated; empty: none)")
       ->capture_default_str();
   app.add_option(
          "--observe-frames", observe_frames,

@@ -113,7 +113,17 @@ Publisher::Publisher(zmq::context_t& ctx, const std::string& endpoint,
   common_options(socket_);
   if (security != nullptr) apply_server_security(socket_, *security);
   socket_.set(zmq::sockopt::sndhwm, send_queue);
-  bind_or_throw(socket_, "PUB", endpoint);
+  // Several endpoints, comma-separated: one socket bound to each (ZeroMQ's PUB sends every
+  // message to the subscribers of all of them).
+  std::string::size_type start = 0;
+  while (true) {
+    const auto comma = endpoint.find(',', start);
+    bind_or_throw(socket_, "PUB", endpoint.substr(start, comma - start));
+    if (!endpoints_.empty()) endpoints_ += ',';
+    endpoints_ += socket_.get(zmq::sockopt::last_endpoint);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
 }
 
 void Publisher::send(std::string_view topic, std::span<const std::uint8_t> payload) {
@@ -123,7 +133,7 @@ void Publisher::send(std::string_view topic, std::span<const std::uint8_t> paylo
 }
 
 std::string Publisher::endpoint() const {
-  return socket_.get(zmq::sockopt::last_endpoint);
+  return endpoints_;
 }
 
 Subscriber::Subscriber(zmq::context_t& ctx, const std::vector<std::string>& endpoints,

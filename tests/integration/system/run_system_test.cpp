@@ -1,15 +1,20 @@
 // scripts/run-system as a user runs it, as root: the nodes' endpoints reachable from the host at
 // the addresses it prints (a veth pair into its private network namespace, removed at the end),
 // a recorder on the host hears frames, events and ground truth there, and --record --raw-frames
-// leaves a whole log that tactile_replay --remeasure checks bit for bit.
+// leaves a whole log that tactile_replay --remeasure checks bit for bit. Not as root, the nodes'
+// ipc:// endpoints reachable from the host; --host-net none, nothing joined to the host.
 #include <gtest/gtest.h>
+#include <pwd.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <map>
 #include <regex>
 
 #include "process.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/wire/envelope.hpp"
+#include "tactile/wire/sockets.hpp"
 #include "tools_support.hpp"
 
 namespace tactile {
@@ -131,18 +136,122 @@ TEST(RunSystem, EndpointsReachableFromTheHostAndTheRunRecordedWithRawFrames) {
       << remeasure.out << remeasure.err;
 }
 
+// Not as root (here the user nobody), the nodes run in a user namespace that no veth pair joins to
+// the host; they also bind ipc:// endpoints in OUT/ipc, which run-system prints, and a subscriber
+// on the host receives each publisher's messages there (docs/system.md, "Not as root").
+TEST(RunSystem, NotAsRootTheNodesIpcEndpointsReachTheHost) {
+  ASSERT_EQ(::geteuid(), 0U) << "the test becomes nobody with setpriv (CI runs as root)";
+  const passwd* nobody = ::getpwnam("nobody");
+  ASSERT_NE(nobody, nullptr);
+  TempDir dir;
+  // nobody writes the run's output folder (run-system removes and makes OUT, so its parent).
+  const auto parent = dir / "nobody";
+  std::filesystem::create_directories(parent);
+  std::filesystem::permissions(
+      dir.path(), std::filesystem::perms::owner_all | std::filesystem::perms::others_exec);
+  ASSERT_EQ(::chown(parent.c_str(), nobody->pw_uid, nobody->pw_gid), 0);
+  const auto out = parent / "out";
+  Process run({"setpriv", "--reuid=nobody", "--regid=nogroup", "--clear-groups", "bash",
+               (kSource / "scripts/run-system").string(), "--build", TACTILE_BUILD_DIR,
+               "--scenario", TACTILE_OBSERVE_SCENARIO, "--out", out.string(), "--camera-link",
+               "loopback"});
+  ASSERT_TRUE(await_match([&] { return run.err_so_far(); },
+                          "run-system: endpoints: frames (\\S+) events (\\S+) truth (\\S+)"))
+      << run.err_so_far();
+  const std::string err = run.err_so_far();
+  EXPECT_NE(err.find("run-system: not root: "), std::string::npos) << err;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(
+      err, m,
+      std::regex("endpoints: frames (\\S+) events (\\S+) truth (\\S+) \\(from the host, "
+                 "through the file system\\)")))
+      << err;
+  const std::string ipc = "ipc://" + (out / "ipc").string();
+  EXPECT_EQ(m[1], ipc + "/sensor.ipc");
+  EXPECT_EQ(m[2], ipc + "/events.ipc");
+  EXPECT_EQ(m[3], ipc + "/truth.ipc");
+  EXPECT_NE(err.find("record from the host: " + std::string(TACTILE_BUILD_DIR) +
+                     "/tools/tactile_record/tactile_record -o run.tlog " + m[1].str() + " " +
+                     m[2].str() + " " + m[3].str()),
+            std::string::npos)
+      << err;
+
+  // From the host, outside the namespace: a subscriber on each printed endpoint, for 2 s from the
+  // first frame (the nodes start after the line; a subscriber may connect before its publisher
+  // binds).
+  zmq::context_t ctx;
+  const std::vector<std::string> endpoints{m[1], m[2], m[3]};
+  std::vector<std::unique_ptr<wire::Subscriber>> subscribers;
+  for (const auto& e : endpoints)
+    subscribers.push_back(std::make_unique<wire::Subscriber>(ctx, std::vector<std::string>{e},
+                                                             std::vector<std::string>{""}));
+  std::vector<std::map<std::string, int>> topics(endpoints.size());
+  wire::TopicMessage message;
+  auto until = std::chrono::steady_clock::now() + 30s;
+  bool first = true;
+  while (std::chrono::steady_clock::now() < until) {
+    for (std::size_t i = 0; i < subscribers.size(); ++i) {
+      while (subscribers[i]->receive(message, 1ms)) {
+        ++topics[i][message.topic];
+        if (first && i == 0) until = std::chrono::steady_clock::now() + 2s;
+        first = first && i != 0;
+      }
+    }
+  }
+  // 2 s at 100 fps, frames of both fingertips; hand_node's steps; the truth of each frame.
+  EXPECT_GT(topics[0]["frame/left"], 50);
+  EXPECT_GT(topics[0]["frame/right"], 50);
+  EXPECT_GT(topics[1]["decision"], 50);
+  EXPECT_GT(topics[1]["arm"], 50);
+  EXPECT_GT(topics[2]["truth"], 50);
+  // The sockets are the unprivileged user's (the nodes ran as nobody, mapped to root inside).
+  struct stat socket_stat {};
+  ASSERT_EQ(::stat((out / "ipc/sensor.ipc").c_str(), &socket_stat), 0);
+  EXPECT_TRUE(S_ISSOCK(socket_stat.st_mode));
+  EXPECT_EQ(socket_stat.st_uid, nobody->pw_uid);
+
+  // observe.yaml ends at its max_time_s with the task unfinished: exit 1, saying so.
+  const auto r = run.wait(60s);
+  EXPECT_FALSE(r.timed_out);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("the task did not complete"), std::string::npos) << r.err;
+}
+
 // The cameras behind one link shaped to 1 Gbit/s at MTU 1500 (docs/system.md, "Camera links"):
 // the rig serves them in a namespace of their own, sensor_node receives their region of interest
-// over the link, and the task completes with every frame whole.
+// over the link, and the task completes with every frame whole. With --host-net none as root, in
+// a namespace of its own that nothing joins to the host: no veth pair, no ipc endpoints, and it
+// says that the endpoints are not reachable from the host.
 TEST(RunSystem, CamerasBehindOneLinkShapedToLineRateCompleteTheTask) {
+  ASSERT_EQ(::geteuid(), 0U) << "--host-net none is root's (CI runs as root)";
   TempDir dir;
   const auto out = dir / "out";
   Process run({"bash", (kSource / "scripts/run-system").string(), "--build", TACTILE_BUILD_DIR,
                "--scenario", TACTILE_SYSTEM_SCENARIO, "--out", out.string(), "--host-net", "none",
                "--camera-link", "shared"});
+  ASSERT_TRUE(await_match([&] { return run.err_so_far(); }, "run-system: starting the rig"))
+      << run.err_so_far();
+  // While the nodes run: the script is in a network namespace of its own, and no veth pair of
+  // its (tsysPID, alias tactile-run-system:PID:START) is on the host.
+  const auto own_net = std::filesystem::read_symlink("/proc/self/ns/net");
+  const auto run_net =
+      std::filesystem::read_symlink("/proc/" + std::to_string(run.pid()) + "/ns/net");
+  EXPECT_NE(run_net, own_net);
+  const auto links = testing::run({"ip", "-o", "link", "show"});
+  EXPECT_EQ(links.exit_code, 0);
+  EXPECT_EQ(links.out.find("tsys" + std::to_string(run.pid())), std::string::npos) << links.out;
+  EXPECT_EQ(links.out.find("tactile-run-system:" + std::to_string(run.pid()) + ":"),
+            std::string::npos)
+      << links.out;
   const auto r = run.wait(240s);
   ASSERT_FALSE(r.timed_out) << r.err;
   EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("run-system: --host-net none: the nodes' endpoints are not reachable from "
+                       "the host\n"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("run-system: endpoints:"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out / "ipc"));
   EXPECT_NE(r.err.find("run-system: cameras 10.78.0.1,10.78.0.3 behind 1 link(s) shaped to 1gbit, "
                        "MTU 1500 (shared)"),
             std::string::npos)

@@ -5,6 +5,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <thread>
 
@@ -448,6 +449,44 @@ TEST(Sockets, PublishSubscribeOverTcp) {
       EXPECT_EQ(msg.topic, frame_topic("left"));
     }
   }
+}
+
+// run-system without root binds the nodes' publishers on ipc:// beside tcp:// (docs/system.md):
+// one Publisher, comma-separated endpoints, every message on each of them.
+TEST(Sockets, PublisherBindsEachOfSeveralEndpoints) {
+  zmq::context_t ctx;
+  char dir_template[] = "/tmp/wire_test_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir_template), nullptr);
+  const std::string ipc = std::string("ipc://") + dir_template + "/pub.ipc";
+  {
+    Publisher pub(ctx, "tcp://127.0.0.1:*," + ipc);
+    const std::string endpoints = pub.endpoint();
+    const auto comma = endpoints.find(',');
+    ASSERT_NE(comma, std::string::npos) << endpoints;
+    const std::string tcp = endpoints.substr(0, comma);
+    EXPECT_TRUE(tcp.starts_with("tcp://127.0.0.1:")) << endpoints;
+    EXPECT_EQ(endpoints.substr(comma + 1), ipc);
+    Subscriber over_tcp(ctx, {tcp}, {""});
+    Subscriber over_ipc(ctx, {ipc}, {""});
+    TopicMessage msg;
+    bool tcp_got = false;
+    bool ipc_got = false;
+    for (int i = 0; i < 200 && !(tcp_got && ipc_got); ++i) {
+      pub.send(kEventTopic, bytes_of("both"));
+      tcp_got = tcp_got || over_tcp.receive(msg, 5ms);
+      ipc_got = ipc_got || over_ipc.receive(msg, 5ms);
+    }
+    EXPECT_TRUE(tcp_got);
+    EXPECT_TRUE(ipc_got);
+    // An endpoint that cannot be bound throws naming it, not the list.
+    try {
+      Publisher bad(ctx, "tcp://127.0.0.1:*,nonsense://x");
+      FAIL() << "bound nonsense";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("'nonsense://x'"), std::string::npos) << e.what();
+    }
+  }
+  std::filesystem::remove_all(dir_template);
 }
 
 // The rig wakes for its render instant on a timerfd beside its sockets: poll_readable reports

@@ -41,16 +41,20 @@ class Publisher {
  public:
   // With `security`, a CURVE server: only subscribers that know its public key receive.
   // `send_queue`: messages kept for each subscriber that falls behind (ZeroMQ's SNDHWM); past it
-  // that subscriber's messages are dropped.
+  // that subscriber's messages are dropped. `endpoint` may name several, comma-separated (e.g.
+  // "tcp://*:5555,ipc:///tmp/run/sensor.ipc"): it binds each, and every message goes to the
+  // subscribers of all of them.
   Publisher(zmq::context_t& ctx, const std::string& endpoint,
             const ServerSecurity* security = nullptr, int send_queue = kDefaultSendQueue);
   // Sends [topic, payload]. Never blocks: past the high-water mark a PUB socket drops.
   void send(std::string_view topic, std::span<const std::uint8_t> payload);
-  // The endpoint actually bound (a wildcard port resolved), e.g. "tcp://0.0.0.0:5555".
+  // The endpoints actually bound (a wildcard port resolved), comma-separated as given, e.g.
+  // "tcp://0.0.0.0:5555".
   std::string endpoint() const;
 
  private:
   zmq::socket_t socket_;
+  std::string endpoints_;
 };
 
 struct TopicMessage {
