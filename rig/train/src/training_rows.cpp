@@ -17,6 +17,8 @@ static_assert(std::endian::native == std::endian::little,
 
 template <typename T>
 void put(std::string& out, const T* data, std::size_t count) {
+  // An empty run's vectors may hold no storage at all (data() null): nothing to copy.
+  if (count == 0) return;
   out.append(reinterpret_cast<const char*>(data), count * sizeof(T));
 }
 
@@ -29,6 +31,7 @@ class Reader {
     const std::size_t n = count * sizeof(T);
     if (n / sizeof(T) != count || bytes_.size() - at_ < n)
       throw std::runtime_error(source_ + ": the file ends within a run's rows (cut short?)");
+    if (n == 0) return;  // data may be null (an empty vector's)
     std::memcpy(data, bytes_.data() + at_, n);
     at_ += n;
   }

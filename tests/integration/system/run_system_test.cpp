@@ -232,12 +232,13 @@ TEST(RunSystem, NotAsRootTheNodesIpcEndpointsReachTheHost) {
       }
     }
   }
-  // 2 s at 100 fps, frames of both fingertips; hand_node's steps; the truth of each frame.
-  EXPECT_GT(topics[0]["frame/left"], 50);
-  EXPECT_GT(topics[0]["frame/right"], 50);
-  EXPECT_GT(topics[1]["decision"], 50);
-  EXPECT_GT(topics[1]["arm"], 50);
-  EXPECT_GT(topics[2]["truth"], 50);
+  // 2 s at 100 fps (30 under the sanitizers: 26 decisions were seen there), frames of both
+  // fingertips; hand_node's steps; the truth of each frame: each publisher reaches the host.
+  EXPECT_GT(topics[0]["frame/left"], 10);
+  EXPECT_GT(topics[0]["frame/right"], 10);
+  EXPECT_GT(topics[1]["decision"], 10);
+  EXPECT_GT(topics[1]["arm"], 10);
+  EXPECT_GT(topics[2]["truth"], 10);
   // The sockets are the unprivileged user's (the nodes ran as nobody, mapped to root inside).
   struct stat socket_stat {};
   ASSERT_EQ(::stat((out / "ipc/sensor.ipc").c_str(), &socket_stat), 0);
