@@ -20,10 +20,12 @@
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "process.hpp"
+#include "tactile/util/host_load.hpp"
 #include "tactile/wire/envelope.hpp"
 #include "tactile/wire/sockets.hpp"
 
@@ -63,22 +65,15 @@ double median(std::vector<double> v) {
 // taken by the host (steal, /proc/stat) and in which some task here waited for a CPU (PSI,
 // /proc/pressure/cpu "some"; -1 where the kernel has none). Read around each run, printed.
 struct MachineLoad {
-  double steal = 0;     // CPU-seconds stolen
-  double waiting = -1;  // seconds some task waited for a CPU
-  double wall = 0;      // seconds
+  std::optional<util::CpuTimes> cpu;  // /proc/stat (util::read_cpu_times)
+  double waiting = -1;                // seconds some task waited for a CPU
+  double wall = 0;                    // seconds
 
   static MachineLoad now() {
     MachineLoad m;
     m.wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-    std::ifstream stat("/proc/stat");
-    std::string cpu;
-    double field[8] = {};
-    if (stat >> cpu && cpu == "cpu") {
-      for (double& f : field)
-        stat >> f;
-      m.steal = field[7] / static_cast<double>(::sysconf(_SC_CLK_TCK));
-    }
+    m.cpu = util::read_cpu_times();
     std::ifstream psi("/proc/pressure/cpu");
     std::string line;
     if (std::getline(psi, line)) {
@@ -91,12 +86,13 @@ struct MachineLoad {
   // "steal 3% of the CPUs, waiting 12%" from `before` to this.
   std::string since(const MachineLoad& before) const {
     const double wall_s = std::max(wall - before.wall, 1e-9);
-    const double cpus = static_cast<double>(std::max(1L, ::sysconf(_SC_NPROCESSORS_ONLN)));
     const auto percent = [](double share) {
       return std::to_string(std::lround(100 * share)) + "%";
     };
+    const double steal =
+        cpu && before.cpu ? util::steal_percent(*before.cpu, *cpu) / 100 : std::nan("");
     std::string text =
-        "steal " + percent((steal - before.steal) / (cpus * wall_s)) + " of the CPUs";
+        "steal " + (std::isfinite(steal) ? percent(steal) : std::string("?")) + " of the CPUs";
     if (waiting >= 0 && before.waiting >= 0)
       text +=
           ", some task waiting " + percent((waiting - before.waiting) / wall_s) + " of the time";
