@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 
 #include "process.hpp"
 #include "support/child_process.hpp"
@@ -137,6 +138,44 @@ TEST_F(SensorNodeAgainstAravisFake, WaitsForAnAbsentCameraAndStopsCleanly) {
   EXPECT_GE(c.frames.size(), 10U) << node.err_so_far();
   node.signal(SIGTERM);
   const auto r = node.wait(10s);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+TEST_F(SensorNodeAgainstAravisFake, AReferenceThatNeverSettlesIsRefusedAtMostOnceASecond) {
+  // Given a calibration for 320 x 240 the fake camera sends 320 x 240, but its test pattern moves
+  // in every frame: the no-load reference is refused again and again ("a frame changed while
+  // capturing"), each time naming another element and excess G. Issue 39 found that 5 to 50 times
+  // a second for ever; the log now writes it once a second with the count of those held back.
+  testing::SceneOptions o;
+  o.width = 320;
+  o.height = 240;
+  Calibration cal = testing::grid_calibration(o, 4, 3, 60, 14);
+  cal.sensor_id = "left";
+  const auto small = dir_ / "small.yaml";
+  config::save_calibration(small, cal);
+  ChildProcess fake({"arv-fake-gv-camera-0.8", "-i", "127.0.0.2", "-s", "TACTILE03"});
+  Process node({TACTILE_SENSOR_NODE_PATH, "--camera", "127.0.0.2", "--calibration", small.string(),
+                "--publish", endpoint_, "--fps", "100"});
+  // Until the third second of refusals, bounded.
+  const auto deadline = std::chrono::steady_clock::now() + 20s;
+  std::optional<std::chrono::steady_clock::time_point> first;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (!first && node.err_so_far().find("reference refused") != std::string::npos)
+      first = std::chrono::steady_clock::now();
+    if (first && std::chrono::steady_clock::now() > *first + 3500ms) break;
+    std::this_thread::sleep_for(20ms);
+  }
+  node.signal(SIGTERM);
+  const auto r = node.wait(10s);
+  ASSERT_TRUE(first) << "never refused: " << r.err;
+  std::size_t lines = 0;
+  for (auto at = r.err.find("reference refused"); at != std::string::npos;
+       at = r.err.find("reference refused", at + 1))
+    ++lines;
+  // Written at 0, 1, 2 and 3 s (and once more if the last second was cut close).
+  EXPECT_GE(lines, 3U) << r.err;
+  EXPECT_LE(lines, 5U) << r.err;
+  EXPECT_NE(r.err.find("(repeated "), std::string::npos) << r.err;
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 

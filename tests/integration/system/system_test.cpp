@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -401,7 +402,12 @@ TEST(ProcessFaults, ArmEndpointFloodedWithGarbageTheTaskGoesOnAndEveryMessageIsR
   std::thread flood([&] {
     zmq::context_t ctx;
     zmq::socket_t dealer(ctx, zmq::socket_type::dealer);
-    dealer.set(zmq::sockopt::linger, 2000);
+    // What is still queued when the flood ends (up to the send HWM of 1000 and what the kernel
+    // buffers) reaches the rig only as fast as it reads: built with the sanitizers on a loaded
+    // machine that took longer than the 2 s linger this socket had, and 1193 messages were
+    // dropped unsent (refused 98807 of 100000, issue 39). The rig reads all of it long before the
+    // task ends; 60 s bounds the wait.
+    dealer.set(zmq::sockopt::linger, 60000);
     dealer.set(zmq::sockopt::sndtimeo, 2000);
     dealer.connect("tcp://127.0.0.1:5556");
     testing::Garbage g(valid, 23);
@@ -435,6 +441,53 @@ TEST(ProcessFaults, ArmEndpointFloodedWithGarbageTheTaskGoesOnAndEveryMessageIsR
   EXPECT_EQ(log.find("commands now come from another client"), std::string::npos) << log;
   std::fprintf(stderr, "[measured] sent %llu, rig: %s\n", static_cast<unsigned long long>(sent),
                m[0].str().c_str());
+}
+
+// Issue 39, item 7: the flooded-arm run that once ended "segment timed out" in LOWER under the
+// sanitizers, reproduced on purpose. What the flood and the sanitizers did there was to leave
+// hand_node unscheduled past the arm controller's deadman (40 ms) during a motion; here hand_node
+// is stopped (SIGSTOP) for 45 to 75 ms every 200-230 ms from the carry to the release: just past
+// the deadman, so that it wakes within a state period of the trip. Each stop trips the deadman
+// mid-MoveTo; hand_node, running again, answers the ArmState that reports the hold by sending the
+// motion again. 55d5f03 closed a window in which a command sent on waking ended the hold before
+// any ArmState had reported it, so the motion was never sent again and the segment timed out:
+// what this test found of that window is in docs/reliability.md ("The flooded arm").
+TEST(ProcessFaults, HandNodeStalledPastTheDeadmanDuringTheMotionsTheArmResumesEachTime) {
+  LoopbackSystem s(kScenario);
+  ASSERT_TRUE(s.wait_event(v1::EVENT_KIND_PHASE, 60s, "TRANSPORT")) << logs(s);
+  std::atomic<bool> stalling{true};
+  int stalls = 0;
+  std::thread staller([&] {
+    // Bounded: 400 stalls are well over a minute, longer than the carry and the lowering.
+    while (stalling.load() && stalls < 400) {
+      s.hand().signal(SIGSTOP);
+      std::this_thread::sleep_for(std::chrono::milliseconds(45 + 5 * (stalls % 7)));
+      s.hand().signal(SIGCONT);
+      ++stalls;
+      std::this_thread::sleep_for(150ms);
+    }
+  });
+  const bool released = s.wait_event(v1::EVENT_KIND_RELEASE_CLASSIFIED, 90s).has_value();
+  stalling = false;
+  staller.join();
+  const json r = s.finish(150s);
+  ASSERT_TRUE(released) << logs(s) << "\n--- report\n" << r.dump();
+  EXPECT_FALSE(s.hand_result().timed_out) << logs(s);
+  EXPECT_EQ(s.hand_result().err.find("segment timed out"), std::string::npos) << logs(s);
+  EXPECT_EQ(r["completed"], true) << r.dump() << logs(s);
+  EXPECT_EQ(r["dropped"], false) << r.dump();
+  // The stalls did trip the deadman (the rig's exit line counts its trips), more than once.
+  const std::regex trips("deadman trips ([0-9]+)");
+  std::smatch m;
+  const std::string& log = s.rig_result().err;
+  ASSERT_TRUE(std::regex_search(log, m, trips)) << log;
+  const unsigned long held = std::stoul(m[1].str());
+  EXPECT_GE(held, 2U) << "the stalls never held the arm: " << m[0];
+  EXPECT_NE(s.hand_result().err.find("the arm controller's deadman held the arm: resuming"),
+            std::string::npos)
+      << s.hand_result().err;
+  std::fprintf(stderr, "[measured] %d stalls of 45-75 ms, %lu deadman holds, completed\n", stalls,
+               held);
 }
 
 TEST(ProcessFaults, HandNodeKilledTheDeadmanHoldsTheArmWithin50ms) {
