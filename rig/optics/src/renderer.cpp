@@ -112,6 +112,10 @@ Renderer::Renderer(const Calibration& cal, const CameraParams& cam, const Sensor
       background_[static_cast<std::size_t>(y) * static_cast<std::size_t>(cam_.width) +
                   static_cast<std::size_t>(x)] = static_cast<float>(background_at(x, y));
 
+  background_sigma_.resize(background_.size());
+  for (std::size_t i = 0; i < background_.size(); ++i)
+    background_sigma_[i] = static_cast<float>(pixel_sigma(static_cast<double>(background_[i])));
+
   // The background bank (CameraParams::refresh_outside_disks), from its own generator.
   bank_rng_.reseed(noise_seed ^ 0xB4C6'0F5E'2A17'93D1ULL);
   const std::size_t pixels = background_.size();
@@ -284,11 +288,21 @@ void Renderer::draw_spot(std::size_t k, const ElementLoad& load) {
     const Span& span = spans_[b.span_offset + static_cast<std::size_t>(y - b.y0)];
     if (span.x0 == span.x1) continue;
     const double ey = peak > 0 ? peak * std::exp(-(y - cy) * (y - cy) * inv) : 0.0;
-    const float* bg = background_.data() + static_cast<std::size_t>(y) * cam_.width + b.x0;
+    const std::size_t pixel = static_cast<std::size_t>(y) * cam_.width + b.x0;
+    const float* bg = background_.data() + pixel;
     const std::size_t row = b.offset + static_cast<std::size_t>(y - b.y0) * w;
+    if (!(ey > 1e-6)) {
+      // A row the spot does not reach: the background and its sigma as they are.
+      const auto j0 = static_cast<std::size_t>(span.x0);
+      const auto n = static_cast<std::size_t>(span.x1 - span.x0);
+      std::copy_n(bg + j0, n, cache_value_.begin() + static_cast<std::ptrdiff_t>(row + j0));
+      std::copy_n(background_sigma_.begin() + static_cast<std::ptrdiff_t>(pixel + j0), n,
+                  cache_sigma_.begin() + static_cast<std::ptrdiff_t>(row + j0));
+      continue;
+    }
     for (int j = span.x0; j < span.x1; ++j) {
       const auto u = static_cast<std::size_t>(j);
-      const double v = static_cast<double>(bg[u]) + (ey > 1e-6 ? ey * column_exp_[u] : 0.0);
+      const double v = static_cast<double>(bg[u]) + ey * column_exp_[u];
       cache_value_[row + u] = static_cast<float>(v);
       cache_sigma_[row + u] = static_cast<float>(pixel_sigma(v));
     }

@@ -137,6 +137,7 @@ class Renderer {
   std::vector<double> strength_grid_;
   std::vector<std::vector<double>> g_table_;
   std::vector<float> background_;
+  std::vector<float> background_sigma_;  // pixel_sigma of each background pixel
   // kBackgroundBank noisy background frames, rows of output pixels, and the generator that picks
   // a row from them: apart from the disks' noise, so the disks' pixels do not depend on it.
   std::vector<std::uint8_t> background_bank_;
