@@ -112,6 +112,10 @@ Renderer::Renderer(const Calibration& cal, const CameraParams& cam, const Sensor
       background_[static_cast<std::size_t>(y) * static_cast<std::size_t>(cam_.width) +
                   static_cast<std::size_t>(x)] = static_cast<float>(background_at(x, y));
 
+  background_sigma_.resize(background_.size());
+  for (std::size_t i = 0; i < background_.size(); ++i)
+    background_sigma_[i] = static_cast<float>(pixel_sigma(static_cast<double>(background_[i])));
+
   // The background bank (CameraParams::refresh_outside_disks), from its own generator.
   bank_rng_.reseed(noise_seed ^ 0xB4C6'0F5E'2A17'93D1ULL);
   const std::size_t pixels = background_.size();
@@ -147,6 +151,15 @@ Renderer::Renderer(const Calibration& cal, const CameraParams& cam, const Sensor
     b.y1 = std::min(cam_.height - 1, static_cast<int>(std::ceil(e.center_px.y + e.radius_px)) + 1);
     b.offset = offset;
     offset += static_cast<std::size_t>(b.x1 - b.x0 + 1) * static_cast<std::size_t>(b.y1 - b.y0 + 1);
+    b.span_offset = spans_.size();
+    spans_.resize(spans_.size() + static_cast<std::size_t>(b.y1 - b.y0 + 1), Span{0, 0});
+    for (const DiskRow& row : disk_rows(e.center_px, e.radius_px)) {
+      if (row.y < b.y0 || row.y > b.y1) continue;
+      const int x0 = std::clamp(row.x0, b.x0, b.x1 + 1) - b.x0;
+      const int x1 = std::clamp(row.x1, b.x0, b.x1 + 1) - b.x0;
+      spans_[b.span_offset + static_cast<std::size_t>(row.y - b.y0)] = {x0, std::max(x0, x1)};
+    }
+    column_exp_.resize(std::max(column_exp_.size(), static_cast<std::size_t>(b.x1 - b.x0 + 1)));
     boxes_.push_back(b);
   }
   cache_value_.assign(offset, 0.0F);
@@ -261,17 +274,37 @@ void Renderer::draw_spot(std::size_t k, const ElementLoad& load) {
   const double uy = std::isfinite(load.uy_mm) ? load.uy_mm : 0.0;
   const double cx = e.zero_px.x + ux / cal_.mm_per_px;
   const double cy = e.zero_px.y + uy / cal_.mm_per_px;
-  const int w = b.x1 - b.x0 + 1;
+  const std::size_t w = static_cast<std::size_t>(b.x1 - b.x0 + 1);
   const double inv = 1.0 / (2.0 * sigma * sigma);
-  std::size_t i = b.offset;
+  // The spot is separable: exp(-dx^2 inv) once per column instead of once per pixel (the same
+  // numbers), and only where a row's factor leaves it visible.
+  if (peak > 0) {
+    for (std::size_t j = 0; j < w; ++j) {
+      const double dx = static_cast<double>(b.x0 + static_cast<int>(j)) - cx;
+      column_exp_[j] = std::exp(-dx * dx * inv);
+    }
+  }
   for (int y = b.y0; y <= b.y1; ++y) {
+    const Span& span = spans_[b.span_offset + static_cast<std::size_t>(y - b.y0)];
+    if (span.x0 == span.x1) continue;
     const double ey = peak > 0 ? peak * std::exp(-(y - cy) * (y - cy) * inv) : 0.0;
-    const float* bg = background_.data() + static_cast<std::size_t>(y) * cam_.width;
-    for (int x = b.x0; x < b.x0 + w; ++x, ++i) {
-      const double v = static_cast<double>(bg[x]) +
-                       (ey > 1e-6 ? ey * std::exp(-(x - cx) * (x - cx) * inv) : 0.0);
-      cache_value_[i] = static_cast<float>(v);
-      cache_sigma_[i] = static_cast<float>(pixel_sigma(v));
+    const std::size_t pixel = static_cast<std::size_t>(y) * cam_.width + b.x0;
+    const float* bg = background_.data() + pixel;
+    const std::size_t row = b.offset + static_cast<std::size_t>(y - b.y0) * w;
+    if (!(ey > 1e-6)) {
+      // A row the spot does not reach: the background and its sigma as they are.
+      const auto j0 = static_cast<std::size_t>(span.x0);
+      const auto n = static_cast<std::size_t>(span.x1 - span.x0);
+      std::copy_n(bg + j0, n, cache_value_.begin() + static_cast<std::ptrdiff_t>(row + j0));
+      std::copy_n(background_sigma_.begin() + static_cast<std::ptrdiff_t>(pixel + j0), n,
+                  cache_sigma_.begin() + static_cast<std::ptrdiff_t>(row + j0));
+      continue;
+    }
+    for (int j = span.x0; j < span.x1; ++j) {
+      const auto u = static_cast<std::size_t>(j);
+      const double v = static_cast<double>(bg[u]) + ey * column_exp_[u];
+      cache_value_[row + u] = static_cast<float>(v);
+      cache_sigma_[row + u] = static_cast<float>(pixel_sigma(v));
     }
   }
 }
@@ -336,10 +369,16 @@ void Renderer::noisy_box(std::size_t k, util::Random& rng, Image& out) const noe
   const float* sigma = cache_sigma_.data() + b.offset;
   const auto top = static_cast<float>(max_level_);
   auto* base = reinterpret_cast<Pixel*>(out.bytes().data());
-  for (int y = b.y0; y <= b.y1; ++y) {
+  const Span* span = spans_.data() + b.span_offset;
+  for (int y = b.y0; y <= b.y1; ++y, ++span) {
+    // The pool offsets stay those of the whole box, so a disk pixel's noise does not depend on
+    // which pixels around it are drawn.
     Pixel* row = base + static_cast<std::size_t>(y) * static_cast<std::size_t>(cam_.width) +
                  static_cast<std::size_t>(b.x0);
-    for (std::size_t x = 0; x < w; ++x) {
+    // Bounds in locals: the pixel stores may alias anything (8-bit pixels), so a bound read
+    // through `span` would be reloaded every pixel and the loop left unvectorised.
+    const auto x_end = static_cast<std::size_t>(span->x1);
+    for (auto x = static_cast<std::size_t>(span->x0); x < x_end; ++x) {
       // Round half up after clamping to the sensor's range (values are never negative here).
       const float v = std::clamp(value[x] + sigma[x] * z[x], 0.0F, top);
       row[x] = static_cast<Pixel>(v + 0.5F);

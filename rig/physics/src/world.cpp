@@ -14,11 +14,25 @@ Vec3 cross(Vec3 a, Vec3 b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 
-Vec3 rotate_yaw(Vec3 v, double yaw) {
-  const double c = std::cos(yaw);
-  const double s = std::sin(yaw);
+Vec3 rotate_yaw(Vec3 v, double c, double s) {
   return {c * v.x - s * v.y, s * v.x + c * v.y, v.z};
 }
+
+Vec3 rotate_yaw(Vec3 v, double yaw) {
+  return rotate_yaw(v, std::cos(yaw), std::sin(yaw));
+}
+
+// hypot(a, b) > limit, with hypot only where the squares cannot decide: far from the limit the
+// squares' rounding (a few ulps) cannot change the answer, near it the direct form does.
+bool hypot_exceeds(double a, double b, double limit) {
+  const double s2 = a * a + b * b;
+  const double l2 = limit * limit;
+  if (limit >= 0 && s2 < l2 * (1.0 - 1e-9)) return false;
+  return std::hypot(a, b) > limit;
+}
+
+// Margin of the fingertips' bounding test (m): far above the rounding of a feeler's position.
+constexpr double kReachMargin = 1e-6;
 
 Vec3 clamp_norm(Vec3 v, double max) {
   const double n = norm(v);
@@ -82,6 +96,8 @@ World::World(const WorldParams& p) : p_(p) {
     tips_[i].elements = layout;
     tips_[i].offset_w = {i == 0 ? -open : open, 0, 0};
   }
+  for (const Element& e : layout)
+    reach_m_ = std::max(reach_m_, norm(e.tip_f));
   cap_.position_m = {p_.cap.x_m, p_.cap.y_m, p_.cap.height_m / 2.0};
   cap_.place = CapPlace::kOnTable;
   place_fingertips();
@@ -263,13 +279,15 @@ void World::update_fingers(double dt) noexcept {
 
 void World::place_fingertips() noexcept {
   const Vec3 wrist = wrist_actual();
+  const double c = std::cos(arm_.yaw_rad);
+  const double s = std::sin(arm_.yaw_rad);
   for (std::size_t i = 0; i < kFingertips; ++i) {
     Fingertip& t = tips_[i];
     const FingertipAxes& ax = kFingertipAxesInWrist[i];
-    t.x_f = rotate_yaw(ax.x, arm_.yaw_rad);
-    t.y_f = rotate_yaw(ax.y, arm_.yaw_rad);
-    t.z_f = rotate_yaw(ax.z, arm_.yaw_rad);
-    t.apex_world = wrist + rotate_yaw(t.offset_w, arm_.yaw_rad);
+    t.x_f = rotate_yaw(ax.x, c, s);
+    t.y_f = rotate_yaw(ax.y, c, s);
+    t.z_f = rotate_yaw(ax.z, c, s);
+    t.apex_world = wrist + rotate_yaw(t.offset_w, c, s);
   }
 }
 
@@ -314,33 +332,50 @@ Vec3 World::relative_velocity(const BaseMotion& b, std::size_t i, Vec3 pe) const
   return v_surface - v_base;
 }
 
+bool World::out_of_reach(const Fingertip& t) const noexcept {
+  const Vec3 a = t.apex_world - cap_.position_m;
+  const double reach = reach_m_ + kReachMargin;
+  const double side = p_.cap.radius_m + reach;
+  // Beyond the rim's 0.5 mm fade-out above or below, or beyond the cap's side.
+  return std::abs(a.z) > p_.cap.height_m / 2.0 + 0.0005 + reach ||
+         a.x * a.x + a.y * a.y > side * side;
+}
+
 void World::contact_forces(const BaseMotion& b, Vec3& force, double& torque, double dt) noexcept {
   const double rc = p_.cap.radius_m;
   const double half_h = p_.cap.height_m / 2.0;
   const double kn = p_.fingertip.normal_stiffness_npm;
   const double ct = p_.fingertip.tangential_damping_nspm;
+  // Squared distances beyond this (rc with a margin over their rounding) are out of contact.
+  const double rc2_out = rc * rc * (1.0 + 1e-9);
   const Vec3 c = cap_.position_m;
   for (std::size_t i = 0; i < kFingertips; ++i) {
     Fingertip& t = tips_[i];
+    // A fingertip away from the cap: its feelers are all out of contact, and were already.
+    if (!touching_[i] && out_of_reach(t)) continue;
+    bool touching = false;
     for (Element& e : t.elements) {
       const Vec3 pe = t.apex_world + e.tip_f.x * t.x_f + e.tip_f.y * t.y_f + e.tip_f.z * t.z_f;
       const double dx = pe.x - c.x;
       const double dy = pe.y - c.y;
       const double dz = pe.z - c.z;
-      const double d = std::hypot(dx, dy);
-      double depth = rc - d;
       // The cap's rim: a feeler beyond the top or bottom edge loses contact over 0.5 mm.
       const double edge = std::clamp((half_h + 0.0005 - std::abs(dz)) / 0.0005, 0.0, 1.0);
-      depth *= edge;
+      const double d2 = dx * dx + dy * dy;
+      const double d = edge > 0 && d2 <= rc2_out ? std::hypot(dx, dy) : rc;
+      const double depth = (rc - d) * edge;
       if (depth <= 0 || d <= 1e-9) {
-        e.contact = false;
-        e.indentation_m = 0;
-        e.fn_n = 0;
-        e.s_mm = {};
-        e.ft_n = {};
-        e.sliding = false;
+        if (e.contact) {
+          e.contact = false;
+          e.indentation_m = 0;
+          e.fn_n = 0;
+          e.s_mm = {};
+          e.ft_n = {};
+          e.sliding = false;
+        }
         continue;
       }
+      touching = true;
       const bool sticking = e.contact && !e.sliding;
       const double rate = e.contact ? (depth - e.indentation_m) : 0.0;
       e.contact = true;
@@ -368,11 +403,13 @@ void World::contact_forces(const BaseMotion& b, Vec3& force, double& torque, dou
       force = force + f;
       torque += dx * f.y - dy * f.x;
     }
+    touching_[i] = touching;
   }
 }
 
 void World::update_tangential(const BaseMotion& b, double dt) noexcept {
   for (std::size_t i = 0; i < kFingertips; ++i) {
+    if (!touching_[i]) continue;
     Fingertip& t = tips_[i];
     for (Element& e : t.elements) {
       if (!e.contact) continue;
@@ -389,7 +426,7 @@ void World::update_tangential(const BaseMotion& b, double dt) noexcept {
       // Static friction holds the tip until the spring force reaches mu_s F_n; then the tip
       // breaks loose and the spring swings through the kinetic level to 2 mu_k - mu_s (the
       // undamped stick-slip release), where the tip sticks again.
-      if (std::hypot(e.ft_n[0], e.ft_n[1]) > p_.cap.friction * e.fn_n) {
+      if (hypot_exceeds(e.ft_n[0], e.ft_n[1], p_.cap.friction * e.fn_n)) {
         const std::array<double, 2> before = e.s_mm;
         release_to(e, std::max(0.0, 2.0 * mu_k_ - p_.cap.friction) * e.fn_n);
         e.sliding = true;
@@ -404,10 +441,7 @@ void World::update_cap_place() noexcept {
   const double bottom = cap_.position_m.z - p_.cap.height_m / 2.0;
   const double off_axis =
       std::hypot(cap_.position_m.x - bottle_x_m(), cap_.position_m.y - bottle_y_m());
-  bool any_contact = false;
-  for (const Fingertip& t : tips_)
-    for (const Element& e : t.elements)
-      any_contact = any_contact || e.contact;
+  const bool any_contact = touching_[0] || touching_[1];
 
   if (bottom > 0.005) cap_.lifted = true;
   if (cap_.place == CapPlace::kThreaded) {
@@ -513,14 +547,17 @@ void World::integrate_cap(Vec3 force, double torque, const Supports& s, double i
 }
 
 bool World::state_finite() const noexcept {
-  bool ok = finite(cap_.position_m) && finite(cap_.velocity_mps) && std::isfinite(cap_.yaw_rad) &&
-            std::isfinite(cap_.yaw_rate_rps) && finite(arm_.position_m);
+  const bool ok = finite(cap_.position_m) && finite(cap_.velocity_mps) &&
+                  std::isfinite(cap_.yaw_rad) && std::isfinite(cap_.yaw_rate_rps) &&
+                  finite(arm_.position_m);
+  // 0 x a finite value is 0, 0 x inf or NaN is NaN: one sum tells whether all are finite,
+  // without a branch per element.
+  double zero = 0;
   for (const Fingertip& t : tips_) {
-    for (const Element& e : t.elements) {
-      ok = ok && std::isfinite(e.fn_n) && std::isfinite(e.s_mm[0]) && std::isfinite(e.s_mm[1]);
-    }
+    for (const Element& e : t.elements)
+      zero += 0.0 * e.fn_n + 0.0 * e.s_mm[0] + 0.0 * e.s_mm[1];
   }
-  return ok;
+  return ok && zero == 0;
 }
 
 // After a step that left something non-finite: the last finite state, every feeler let go.
@@ -532,6 +569,7 @@ void World::roll_back(const ArmState& arm, const CapState& cap, double dt) noexc
       e = Element{e.tip_f, e.normal_f};
     }
   }
+  touching_ = {};
   place_fingertips();
   t_ -= dt;
 }

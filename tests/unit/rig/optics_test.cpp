@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include "tactile/config/calibration_file.hpp"
@@ -94,8 +96,8 @@ TEST(Optics, NoiseHasTheStatedStatistics) {
   const Vec2 c = cal.elements[0].center_px;
   std::vector<int> xs;
   std::vector<int> ys;
-  for (int dy = -10; dy <= 10; dy += 2)
-    for (int dx = -10; dx <= 10; dx += 2) {
+  for (int dy = -8; dy <= 8; dy += 2)
+    for (int dx = -8; dx <= 8; dx += 2) {
       xs.push_back(static_cast<int>(c.x) + dx);
       ys.push_back(static_cast<int>(c.y) + dy);
     }
@@ -143,14 +145,12 @@ TEST(Optics, LiveBackgroundOutsideTheDisksLeavesTheDisksAlone) {
     util::Random rng_l(9);
     util::Random rng_f(9);
     std::vector<ElementLoad> loads(41, ElementLoad{0.4, 0.01, -0.01});
-    // The disks' bounding squares: the pixels each frame's spots and noise are drawn into.
+    // The disks S: the pixels each frame's spots and noise are drawn into.
     std::vector<bool> in_disk(static_cast<std::size_t>(cal.width * cal.height), false);
     for (const ElementCalibration& e : cal.elements)
-      for (int y = 0; y < cal.height; ++y)
-        for (int x = 0; x < cal.width; ++x)
-          if (std::abs(x - e.center_px.x) <= e.radius_px + 2 &&
-              std::abs(y - e.center_px.y) <= e.radius_px + 2)
-            in_disk[static_cast<std::size_t>(y * cal.width + x)] = true;
+      for (const DiskRow& row : disk_rows(e.center_px, e.radius_px))
+        for (int x = row.x0; x < row.x1; ++x)
+          in_disk[static_cast<std::size_t>(row.y * cal.width + x)] = true;
     Image l0;
     Image l1;
     Image f1;
@@ -190,6 +190,77 @@ TEST(Optics, LiveBackgroundOutsideTheDisksLeavesTheDisksAlone) {
     EXPECT_NEAR(sd, std::sqrt(2.0 * (4.0 + (depth == 8 ? 1.0 / 12 : 0.0)) * 15.0 / 16.0), 0.1);
     EXPECT_LT(static_cast<double>(zero) / n, 0.25);
     EXPECT_NEAR(level / n, rl.background_at(319.5, 239.5) * (1 - 0.35 * 0.4) / scale, 3.0);
+  }
+}
+
+// The renderer draws only the disks' pixels, each spot from one exp per row and one per column:
+// without noise every disk pixel is the direct form's, round(bg + peak exp(-r^2 / 2 sigma^2))
+// with the exp of each pixel's own offsets, bit for bit; the rest of each disk's bounding box
+// keeps the background of the first frame.
+TEST(Optics, DiskPixelsAreTheDirectFormsBitForBit) {
+  struct Case {
+    double fz_n, ux_mm, uy_mm;
+  };
+  const std::vector<Case> cases{{0, 0, 0},         {0.05, 0, 0},      {0.4, 0.01, -0.01},
+                                {1.5, -0.2, 0.15}, {3.0, 0.33, 0.33}, {0.8, 0.5, -0.45},
+                                {6.0, -0.05, 0.0}, {0.2, 0.0, 0.6}};
+  for (int depth : {8, 16}) {
+    SCOPED_TRACE(depth);
+    CameraParams cam;
+    cam.bit_depth = depth;
+    cam.noise_sigma = 0;
+    cam.live_background = false;
+    const SensorOpticsParams opt;
+    const Calibration cal = calibration(cam);
+    Renderer r(cal, cam, opt, 5);
+    util::Random rng(3);
+    Image img;
+    std::vector<ElementLoad> loads(41);
+    r.render(loads, rng, img);
+    const Image first = img;
+    for (std::size_t k = 0; k < loads.size(); ++k) {
+      const Case& c = cases[k % cases.size()];
+      loads[k] = {c.fz_n, c.ux_mm, c.uy_mm};
+    }
+    r.render(loads, rng, img);
+    const double scale = depth == 16 ? 257.0 : 1.0;
+    const double top = depth == 16 ? 65535.0 : 255.0;
+    std::vector<bool> in_disk(static_cast<std::size_t>(cal.width * cal.height), false);
+    int spot_pixels = 0;
+    for (std::size_t k = 0; k < loads.size(); ++k) {
+      const ElementCalibration& e = cal.elements[k];
+      const double p =
+          loads[k].fz_n > 0 ? r.strength_for_g(k, cal.normal_curve.inverse(loads[k].fz_n)) : 0.0;
+      const double sigma =
+          std::clamp(std::sqrt(p / (2.0 * std::numbers::pi * opt.spot_peak_ref * scale)),
+                     opt.spot_sigma_min_px, opt.spot_sigma_max_px);
+      const double peak = p / (2.0 * std::numbers::pi * sigma * sigma);
+      const double cx = e.zero_px.x + loads[k].ux_mm / cal.mm_per_px;
+      const double cy = e.zero_px.y + loads[k].uy_mm / cal.mm_per_px;
+      const double inv = 1.0 / (2.0 * sigma * sigma);
+      for (const DiskRow& row : disk_rows(e.center_px, e.radius_px)) {
+        const int y = row.y;
+        const double ey = peak > 0 ? peak * std::exp(-(y - cy) * (y - cy) * inv) : 0.0;
+        for (int x = row.x0; x < row.x1; ++x) {
+          in_disk[static_cast<std::size_t>(y * cal.width + x)] = true;
+          const auto bg = static_cast<float>(r.background_at(x, y));
+          const double spot = ey > 1e-6 ? ey * std::exp(-(x - cx) * (x - cx) * inv) : 0.0;
+          const auto v = static_cast<float>(static_cast<double>(bg) + spot);
+          const float clamped = std::clamp(v, 0.0F, static_cast<float>(top));
+          const auto expected = static_cast<std::uint32_t>(clamped + 0.5F);
+          ASSERT_EQ(img.view().at(x, y), expected) << "element " << k << " at " << x << "," << y;
+          spot_pixels += spot > 0.5 ? 1 : 0;
+        }
+      }
+    }
+    EXPECT_GT(spot_pixels, 500);  // the cases draw visible spots, not only background
+    for (int y = 0; y < cal.height; ++y) {
+      for (int x = 0; x < cal.width; ++x) {
+        if (!in_disk[static_cast<std::size_t>(y * cal.width + x)]) {
+          ASSERT_EQ(img.view().at(x, y), first.view().at(x, y)) << x << "," << y;
+        }
+      }
+    }
   }
 }
 

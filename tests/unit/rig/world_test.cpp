@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -119,6 +120,62 @@ TEST(World, RefusesNonFiniteCommands) {
   EXPECT_FALSE(w.arm().active_segment_id == 1);
   ArmCommand v = squeeze(INFINITY);
   EXPECT_FALSE(w.apply(v));
+}
+
+// The contact test's fast paths (a fingertip out of reach skips its feelers, a feeler beyond the
+// cap's radius skips its hypot) against the direct form at every step: each feeler touches
+// exactly when (r_c - hypot(dx, dy)) times the rim's fade is positive, with the cap where the
+// step found it. From high above, down, a squeeze, a lift, and an opening that lets go.
+TEST(World, ContactIsTheDirectFormsAtEveryStep) {
+  WorldParams p;
+  p.arm.start_position_m = {p.cap.x_m, p.cap.y_m, 0.05};
+  World w(p);
+  const double rc = p.cap.radius_m;
+  const double half_h = p.cap.height_m / 2.0;
+  int steps_touching = 0;
+  int steps_apart = 0;
+  const auto check = [&](Vec3 c) {
+    bool any = false;
+    for (std::size_t i = 0; i < kFingertips; ++i) {
+      const Fingertip& t = w.fingertip(i);
+      for (const Element& e : t.elements) {
+        const Vec3 pe = t.apex_world + e.tip_f.x * t.x_f + e.tip_f.y * t.y_f + e.tip_f.z * t.z_f;
+        const double d = std::hypot(pe.x - c.x, pe.y - c.y);
+        const double edge = std::clamp((half_h + 0.0005 - std::abs(pe.z - c.z)) / 0.0005, 0.0, 1.0);
+        const double depth = (rc - d) * edge;
+        const bool expected = depth > 0 && d > 1e-9;
+        ASSERT_EQ(e.contact, expected) << "fingertip " << i << " at t = " << w.time();
+        if (expected) {
+          ASSERT_EQ(e.indentation_m, depth);
+        }
+        any = any || expected;
+      }
+    }
+    ++(any ? steps_touching : steps_apart);
+  };
+  const auto run = [&](double seconds, auto done) {
+    const double end = w.time() + seconds;
+    while (w.time() < end) {
+      const Vec3 c = w.cap().position_m;
+      ASSERT_TRUE(w.step(1e-4));
+      check(c);
+      if (::testing::Test::HasFatalFailure() || done()) return;
+    }
+  };
+  w.apply(move_to(1, {p.cap.x_m, p.cap.y_m, 0.01}));
+  run(5, [&] { return w.arm().segment_done; });
+  w.apply(squeeze(0.002));
+  run(10, [&] { return max_fn(w, 0) > 0.5 && max_fn(w, 1) > 0.5; });
+  w.apply(move_to(2, {p.cap.x_m, p.cap.y_m, 0.03}, 0.3, 0.02));
+  run(3, [&] { return w.arm().segment_done; });
+  ArmCommand open;
+  open.kind = CommandKind::kOpen;
+  open.open_speed_mps = 0.01;
+  open.open_distance_m = 0.01;
+  w.apply(open);
+  run(1.5, [] { return false; });
+  EXPECT_GT(steps_touching, 1000);
+  EXPECT_GT(steps_apart, 1000);
 }
 
 TEST(World, OpenMovesFingertipsAwayByTheDistance) {

@@ -88,7 +88,9 @@ class Renderer {
 
   // Renders one frame into `out` (sized on first use). Spots whose load did not change keep
   // their cached noiseless pixels; every disk gets fresh noise from the pool at offsets drawn
-  // from `rng`. No allocation once `out` has the calibration's size and format.
+  // from `rng`. Only the disks' pixels (the measurement's disks S) are drawn: the rest of each
+  // disk's bounding box is background like the rest of the image. No allocation once `out` has
+  // the calibration's size and format.
   void render(std::span<const ElementLoad> loads, util::Random& rng, Image& out);
 
   // Expected G the measurement finds for a spot of drawn strength p (sum of its noiseless
@@ -105,8 +107,14 @@ class Renderer {
 
  private:
   struct Box {
-    int x0, y0, x1, y1;  // inclusive
-    std::size_t offset;  // into cache_
+    int x0, y0, x1, y1;       // inclusive
+    std::size_t offset;       // into cache_
+    std::size_t span_offset;  // into spans_: one span per row y0..y1
+  };
+  // The columns [x0, x1) of a box row (box-relative) whose centres lie in the disk; empty when
+  // x0 == x1.
+  struct Span {
+    int x0, x1;
   };
   void draw_spot(std::size_t k, const ElementLoad& load);
   template <typename Pixel>
@@ -119,6 +127,8 @@ class Renderer {
   double max_level_ = 255;
   std::vector<float> pool_;
   std::vector<Box> boxes_;
+  std::vector<Span> spans_;
+  std::vector<double> column_exp_;  // draw_spot's per-column factor exp(-(x - cx)^2 / 2 sigma^2)
   std::vector<float> cache_value_;  // noiseless pixel values of every box
   std::vector<float> cache_sigma_;  // their noise sigmas
   std::vector<ElementLoad> last_;
@@ -127,6 +137,7 @@ class Renderer {
   std::vector<double> strength_grid_;
   std::vector<std::vector<double>> g_table_;
   std::vector<float> background_;
+  std::vector<float> background_sigma_;  // pixel_sigma of each background pixel
   // kBackgroundBank noisy background frames, rows of output pixels, and the generator that picks
   // a row from them: apart from the disks' noise, so the disks' pixels do not depend on it.
   std::vector<std::uint8_t> background_bank_;

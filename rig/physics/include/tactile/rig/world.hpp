@@ -252,6 +252,9 @@ class World {
   // Velocity of the cap's surface at `pe` relative to the base of fingertip i's feeler there.
   Vec3 relative_velocity(const BaseMotion& b, std::size_t i, Vec3 pe) const noexcept;
   void contact_forces(const BaseMotion& b, Vec3& force, double& torque, double dt) noexcept;
+  // No feeler of the fingertip can touch the cap's side this step (a bounding test on its apex:
+  // every feeler lies within reach_m_ of it).
+  bool out_of_reach(const Fingertip& t) const noexcept;
   void update_cap_place() noexcept;
   void update_tangential(const BaseMotion& b, double dt) noexcept;
   // What the table and the bottle neck add to the cap this step.
@@ -279,6 +282,9 @@ class World {
   double open_speed_ = 0;
   CapState cap_;
   double mu_k_ = 0;
+  double reach_m_ = 0;  // the farthest feeler tip from the apex
+  // Whether any feeler of fingertip i is in contact (kept by contact_forces).
+  std::array<bool, kFingertips> touching_{};
 };
 
 }  // namespace tactile::rig
