@@ -483,6 +483,7 @@ bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x
                                 x,
                                 y,
                                 a,
+                                a,
                                 wx_.data() + detail::kGaussPad,
                                 wxu_.data() + detail::kGaussPad,
                                 wxu2_.data() + detail::kGaussPad,
