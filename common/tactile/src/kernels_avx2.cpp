@@ -211,14 +211,15 @@ TACTILE_AVX2 Moments moments_u8(const Block& b, const FrameRef& f, const BlockDa
 // summed modulo 2^32 and its true value stays below 2^32 (fits_pass16), so the lane sums come out
 // exact, and so do their 64-bit totals. The row moments come from running sums as in the 8-bit
 // pass: sum_r r s_r = H S - sum_r T_r. Exact like the portable loops.
-constexpr int kMaxVectors16 = 4;  // blocks up to 64 columns
-
-// Whether pass16 takes the block: a whole number of vectors up to kMaxVectors16, and few enough
-// rows that a lane's sum of T_r, at most H (H + 1) / 2 x kV x 2 x 65535, stays below 2^32 (every
-// disk up to about 90 pixels across).
+//
+// Whether pass16 takes the block: 32 or 64 columns (the blocks of every disk up to 64 pixels
+// across; narrower ones arise only where the region of all disks is narrower, and take the
+// portable loops), and few enough rows that a lane's sum of T_r, at most
+// H (H + 1) / 2 x kV x 2 x 65535, stays below 2^32 (H up to 127 rows at 32 columns, 90 at 64:
+// more than a disk that fits the block's width has).
 bool fits_pass16(const Block& b) noexcept {
   const int v = b.width / 16;
-  return b.width % 16 == 0 && v >= 1 && v <= kMaxVectors16 &&
+  return (b.width == 32 || b.width == 64) &&
          static_cast<std::int64_t>(b.height) * (b.height + 1) * v < 32768;
 }
 
@@ -313,16 +314,8 @@ TACTILE_AVX2_INLINE Sums8 pass16(const Block& b, const FrameRef& f, const std::u
 template <bool kMoments, bool kCount, bool kFractions = true>
 TACTILE_AVX2_INLINE Sums8 pass16_any(const Block& b, const FrameRef& f, const std::uint16_t* hi,
                                      const std::uint8_t* lo) noexcept {
-  switch (b.width / 16) {
-    case 1:
-      return pass16<1, kMoments, kCount, kFractions>(b, f, hi, lo);
-    case 2:
-      return pass16<2, kMoments, kCount, kFractions>(b, f, hi, lo);
-    case 3:
-      return pass16<3, kMoments, kCount, kFractions>(b, f, hi, lo);
-    default:
-      return pass16<4, kMoments, kCount, kFractions>(b, f, hi, lo);
-  }
+  if (b.width == 32) return pass16<2, kMoments, kCount, kFractions>(b, f, hi, lo);
+  return pass16<4, kMoments, kCount, kFractions>(b, f, hi, lo);
 }
 
 TACTILE_AVX2 GSum exact_g_u16(const Block& b, const FrameRef& f, const BlockData& d) noexcept {
