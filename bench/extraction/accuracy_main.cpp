@@ -66,6 +66,30 @@ std::vector<Plan> plan(int frames) {
   return p;
 }
 
+// Issue 38's grid: Gaussian, elliptical (aspect 1.5 and 2) and flat-topped spots at
+// peak-to-noise 25 to 150, 8-bit, the spot sizes of the target grid.
+std::vector<Plan> shape_grid(int frames) {
+  std::vector<Plan> p;
+  const auto add = [&](SpotShape shape, double sigma, double aspect, double pnr) {
+    SpotSetting s;
+    s.shape = shape;
+    s.sigma = sigma;
+    s.aspect = aspect;
+    s.pnr = pnr;
+    p.push_back({s, frames});
+  };
+  for (double pnr : {25.0, 50.0, 100.0, 150.0}) {
+    for (double sigma : {1.5, 2.5, 4.0}) {
+      add(SpotShape::kGaussian, sigma, 1.5, pnr);
+      add(SpotShape::kElliptical, sigma, 2.0, pnr);
+      add(SpotShape::kFlatTop, sigma, 1.5, pnr);
+    }
+    for (double sigma : {1.5, 2.5})
+      add(SpotShape::kElliptical, sigma * 2 / 3, 1.5, pnr);
+  }
+  return p;
+}
+
 std::string num(double v, int digits = 6) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*g", digits, v);
@@ -95,6 +119,13 @@ int run(int argc, char** argv) {
   bool target_grid_only = false;
   app.add_flag("--target-grid-only", target_grid_only,
                "only the Gaussian target grid (sigma 1.5-4 px, peak-to-noise 25-150, 8-bit)");
+  bool shapes_only = false;
+  app.add_flag("--shape-grid-only", shapes_only,
+               "only issue 38's grid: Gaussian, elliptical (aspect 1.5, 2) and flat-topped spots, "
+               "peak-to-noise 25-150, 8-bit, all with --frames frames");
+  std::string only_methods;
+  app.add_option("--methods", only_methods,
+                 "comma-separated methods to measure (default: all; names as in the CSV)");
   bool no_accuracy = false;
   bool no_slips = false;
   app.add_flag("--no-accuracy", no_accuracy, "skip the accuracy grid");
@@ -106,7 +137,17 @@ int run(int argc, char** argv) {
       trials = 2000;
     }
     const std::filesystem::path dir(out);
-    const std::vector<Method> all = methods();
+    std::vector<Method> all = methods();
+    if (!only_methods.empty()) {
+      std::vector<Method> chosen;
+      std::stringstream names(only_methods);
+      for (std::string name; std::getline(names, name, ',');) {
+        const Method* m = find_method(name);
+        if (m == nullptr) throw cli::UsageError("--methods: no method '" + name + "'");
+        chosen.push_back(*m);
+      }
+      all = chosen;
+    }
 
     if (!no_accuracy) {
       std::ostringstream acc;
@@ -115,6 +156,7 @@ int run(int argc, char** argv) {
              "ratio_crb\n";
       std::vector<Plan> p = plan(frames);
       if (target_grid_only) p.resize(20);  // plan() lists the target grid first
+      if (shapes_only) p = shape_grid(frames);
       for (std::size_t i = 0; i < p.size(); ++i) {
         const SpotSetting& s = p[i].setting;
         std::fprintf(stderr, "accuracy %zu/%zu: %s sigma %.1f pnr %.0f %d-bit%s, %d frames\n",

@@ -31,7 +31,7 @@ testing::SceneOptions scene_options(const SpotSetting& s) {
 
 // The spot's extent: its largest sigma plus a plateau.
 double spot_extent(const SpotSetting& s) {
-  const double sy = s.shape == SpotShape::kElliptical ? 1.5 * s.sigma : s.sigma;
+  const double sy = s.shape == SpotShape::kElliptical ? s.aspect * s.sigma : s.sigma;
   return std::max(s.sigma, sy) + (s.shape == SpotShape::kFlatTop ? s.flat_radius : 0.0);
 }
 
@@ -79,7 +79,7 @@ testing::Spot make_spot(const SpotSetting& s, Vec2 at) {
   spot.peak = s.peak();
   spot.sigma = s.sigma;
   spot.shape = s.shape;
-  spot.sigma_y = s.shape == SpotShape::kElliptical ? 1.5 * s.sigma : 0;
+  spot.sigma_y = s.shape == SpotShape::kElliptical ? s.aspect * s.sigma : 0;
   spot.flat_radius = s.flat_radius;
   return spot;
 }
@@ -151,8 +151,13 @@ std::string SpotSetting::shape_name() const {
   switch (shape) {
     case SpotShape::kGaussian:
       return "gaussian";
-    case SpotShape::kElliptical:
-      return "elliptical";
+    case SpotShape::kElliptical: {
+      // The issue-2 grid's aspect 1.5 keeps its old name.
+      if (aspect == 1.5) return "elliptical";
+      char name[32];
+      std::snprintf(name, sizeof name, "elliptical-a%g", aspect);
+      return name;
+    }
     case SpotShape::kFlatTop:
       return "flat-top";
   }

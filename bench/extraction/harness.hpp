@@ -14,15 +14,16 @@ namespace tactile::bench {
 // One accuracy condition.
 struct SpotSetting {
   testing::SpotShape shape = testing::SpotShape::kGaussian;
-  double sigma = 2.5;        // px (elliptical: along x; along y it is 1.5 times this)
+  double sigma = 2.5;        // px (elliptical: along x; along y it is `aspect` times this)
   double pnr = 50;           // peak over read-noise sigma
   int depth = 8;             // bits per pixel
   bool shot_noise = false;   // Poisson noise, as much as the read noise at the background
   double flat_radius = 3.0;  // flat-topped spots: radius of the plateau, px
+  double aspect = 1.5;       // elliptical spots: sigma along y over sigma along x
 
-  double peak() const;         // gray levels, 8-bit units
-  double noise_sigma() const;  // read noise, gray levels, 8-bit units
-  std::string shape_name() const;
+  double peak() const;             // gray levels, 8-bit units
+  double noise_sigma() const;      // read noise, gray levels, 8-bit units
+  std::string shape_name() const;  // "elliptical" for aspect 1.5, else "elliptical-a<aspect>"
 };
 
 // Cramer-Rao bound per axis (px) for the position of `s` from one frame and its

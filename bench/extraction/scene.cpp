@@ -51,6 +51,8 @@ std::vector<Method> methods() {
                defaults.gaussian_reach_sigmas, true});
   m.push_back({"gaussian_reach3.5", K::kCore, E::kGaussian, 2.0, 2.0, 3.5, false});
   m.push_back({"gaussian_reach2.5", K::kCore, E::kGaussian, 2.0, 2.0, 2.5, false});
+  m.push_back({"gaussian-axes", K::kCore, E::kGaussianAxes, 2.0, 2.0,
+               defaults.gaussian_reach_sigmas, false});
   m.push_back({"plain", K::kCore, E::kPlain, 2.0, 2.0, 3.5, false});
   m.push_back({"thresholded", K::kCore, E::kThresholded, 2.0, 2.0, 3.5, false});
   m.push_back({"thresholded_floor3", K::kCore, E::kThresholded, 3.0, 2.0, 3.5, false});

@@ -33,6 +33,10 @@ int floor_int(double v) {
   return i > v ? i - 1 : i;
 }
 
+// kGaussianAxes: a width that changed by more than this fraction on the first pass gets a
+// second one.
+constexpr double kAxesRepassChange = 0.1;
+
 double soft_edge(double half_width, double distance) {
   return std::clamp(half_width + 0.5 - std::abs(distance), 0.0, 1.0);
 }
@@ -49,13 +53,16 @@ const char* to_string(CentroidEstimator e) {
       return "windowed";
     case CentroidEstimator::kGaussian:
       return "gaussian";
+    case CentroidEstimator::kGaussianAxes:
+      return "gaussian-axes";
   }
   return "unknown";
 }
 
 std::optional<CentroidEstimator> parse_estimator(std::string_view name) {
-  for (auto e : {CentroidEstimator::kPlain, CentroidEstimator::kThresholded,
-                 CentroidEstimator::kWindowed, CentroidEstimator::kGaussian}) {
+  for (auto e :
+       {CentroidEstimator::kPlain, CentroidEstimator::kThresholded, CentroidEstimator::kWindowed,
+        CentroidEstimator::kGaussian, CentroidEstimator::kGaussianAxes}) {
     if (name == to_string(e)) return e;
   }
   return std::nullopt;
@@ -455,21 +462,22 @@ bool Extractor::windowed_pass(std::size_t element, const ImageView& f, double& x
 
 template <typename Pixel>
 bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x, double& y,
-                              double& sigma) noexcept {
+                              Vec2& sigma, bool per_axis) noexcept {
   const detail::Block& b = blocks_[element];
-  const double s = sigma;
+  const double sx = sigma.x;
+  const double sy = sigma.y;
   // Beyond 12 sigmas the weights are below 1e-31: capping the reach there keeps every exponent
   // of the weights within exp_nonpositive's range (-a u^2 >= -72).
-  const double reach = std::min(opt_.gaussian_reach_sigmas, 12.0) * s;
+  const double reach = std::min(opt_.gaussian_reach_sigmas, 12.0);
   // x, y lie inside the disk and reach is at most 1024 * gaussian_reach_sigmas / 2: the
   // integer conversions are safe for any sane reach; clamp it anyway.
-  const double r = std::min(reach, 1.0e6);
-  const int row_lo = std::max(b.y0, ceil_int(y - r));
-  const int row_hi = std::min(b.y0 + b.height - 1, floor_int(y + r));
-  const int col_lo = std::max(b.x0, ceil_int(x - r));
-  const int col_hi = std::min(b.x0 + b.width - 1, floor_int(x + r));
+  const double rx = std::min(reach * sx, 1.0e6);
+  const double ry = std::min(reach * sy, 1.0e6);
+  const int row_lo = std::max(b.y0, ceil_int(y - ry));
+  const int row_hi = std::min(b.y0 + b.height - 1, floor_int(y + ry));
+  const int col_lo = std::max(b.x0, ceil_int(x - rx));
+  const int col_hi = std::min(b.x0 + b.width - 1, floor_int(x + rx));
   if (row_hi < row_lo || col_hi < col_lo) return false;
-  const double a = 1.0 / (2.0 * s * s);
   // The window lies in the disk when its farthest corner does (with a margin for rounding: the
   // disk's own test is exact).
   const ElementCalibration& ec = cal_.elements[element];
@@ -482,7 +490,8 @@ bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x
                                 col_hi,
                                 x,
                                 y,
-                                a,
+                                1.0 / (2.0 * sx * sx),
+                                1.0 / (2.0 * sy * sy),
                                 wx_.data() + detail::kGaussPad,
                                 wxu_.data() + detail::kGaussPad,
                                 wxu2_.data() + detail::kGaussPad,
@@ -494,21 +503,30 @@ bool Extractor::gaussian_pass(std::size_t element, const ImageView& f, double& x
   if (!(g.s0 > 0)) return false;
   // Newton step on the score sum d (x - c) W(x - c) = 0; where the score is not concave
   // (a spot much wider than the weight) fall back to the weighted-centroid step.
-  const double inv_s2 = 1.0 / (s * s);
-  const double dfx = g.s2x * inv_s2 - g.s0;
-  const double dfy = g.s2y * inv_s2 - g.s0;
+  const double inv_sx2 = 1.0 / (sx * sx);
+  const double inv_sy2 = 1.0 / (sy * sy);
+  const double dfx = g.s2x * inv_sx2 - g.s0;
+  const double dfy = g.s2y * inv_sy2 - g.s0;
   double step_x = dfx < 0 ? -g.s1x / dfx : g.s1x / g.s0;
   double step_y = dfy < 0 ? -g.s1y / dfy : g.s1y / g.s0;
-  if (!(std::abs(step_x) <= s) || !(std::abs(step_y) <= s)) {
+  if (!(std::abs(step_x) <= sx) || !(std::abs(step_y) <= sy)) {
     step_x = g.s1x / g.s0;
     step_y = g.s1y / g.s0;
   }
   x += step_x;
   y += step_y;
   // The weighted second moment is the spot's variance combined with the weight's:
-  // 1/m2 = 1/sigma_spot^2 + 1/sigma_weight^2 for a Gaussian spot.
-  const double m2 = (g.s2x + g.s2y) / (2.0 * g.s0);
-  if (m2 > 0 && m2 < 0.95 * s * s) sigma = 1.0 / std::sqrt(1.0 / m2 - inv_s2);
+  // 1/m2 = 1/sigma_spot^2 + 1/sigma_weight^2 for a Gaussian spot. Per axis, or (a round weight)
+  // the mean of the two.
+  if (per_axis) {
+    const double m2x = g.s2x / g.s0;
+    const double m2y = g.s2y / g.s0;
+    if (m2x > 0 && m2x < 0.95 * sx * sx) sigma.x = 1.0 / std::sqrt(1.0 / m2x - inv_sx2);
+    if (m2y > 0 && m2y < 0.95 * sy * sy) sigma.y = 1.0 / std::sqrt(1.0 / m2y - inv_sy2);
+  } else {
+    const double m2 = (g.s2x + g.s2y) / (2.0 * g.s0);
+    if (m2 > 0 && m2 < 0.95 * sx * sx) sigma.x = sigma.y = 1.0 / std::sqrt(1.0 / m2 - inv_sx2);
+  }
   return std::isfinite(x) && std::isfinite(y);
 }
 
@@ -524,6 +542,7 @@ detail::MomentKind start_moments(CentroidEstimator e) noexcept {
     case CentroidEstimator::kWindowed:
       return detail::MomentKind::kThresholdedCount;
     case CentroidEstimator::kGaussian:
+    case CentroidEstimator::kGaussianAxes:
       return detail::MomentKind::kStart;
   }
   return detail::MomentKind::kThresholded;
@@ -533,27 +552,33 @@ detail::MomentKind start_moments(CentroidEstimator e) noexcept {
 
 template <typename Pixel>
 void Extractor::gaussian_refine(std::size_t element, const ImageView& f, const detail::Moments& m,
-                                double g, Vec2& p) noexcept {
+                                double g, bool per_axis, Vec2& p) noexcept {
   const ElementCalibration& ec = cal_.elements[element];
   // Width of the weight from the spot: for a Gaussian of peak A above a floor f,
   // G = 2 pi sigma^2 (A - f - f ln(A / f)). The peak increment is the largest excess over
-  // the threshold (whole gray levels) plus the floor.
+  // the threshold (whole gray levels) plus the floor. For an elliptical spot this is the
+  // geometric mean of its two widths; per_axis then finds each axis's own from the first pass.
   const double fl = cal_.noise_floor;
   const double peak = m.peak > 0 ? m.peak + fl : 0.0;
   const double shape = fl > 0 ? peak - fl - fl * std::log(std::max(peak / fl, 1.0)) : peak;
-  double sigma = shape > 0.05 * peak && shape > 0 ? std::sqrt(g / (2 * std::numbers::pi * shape))
-                                                  : ec.radius_px / 4;
-  sigma = std::clamp(sigma, 0.6, std::max(0.6, ec.radius_px / 2));
+  const double widest = std::max(0.6, ec.radius_px / 2);
+  const double s0 =
+      std::clamp(shape > 0.05 * peak && shape > 0 ? std::sqrt(g / (2 * std::numbers::pi * shape))
+                                                  : ec.radius_px / 4,
+                 0.6, widest);
+  Vec2 sigma{s0, s0};
   double gx = p.x;
   double gy = p.y;
-  const double sigma_before = sigma;
-  if (!gaussian_pass<Pixel>(element, f, gx, gy, sigma)) return;
-  // A weight far from the spot's width loses efficiency: once more with the better width.
-  if (std::abs(sigma - sigma_before) > 0.25 * sigma_before) {
-    sigma = std::clamp(sigma, 0.6, std::max(0.6, ec.radius_px / 2));
+  if (!gaussian_pass<Pixel>(element, f, gx, gy, sigma, per_axis)) return;
+  // A weight far from the spot's width loses efficiency: once more with the better width. Per
+  // axis the widths of an elliptical spot part from the round start by less (aspect 1.5: about
+  // a fifth each way), so there the bar is lower.
+  const double bar = per_axis ? kAxesRepassChange : 0.25;
+  if (std::abs(sigma.x - s0) > bar * s0 || std::abs(sigma.y - s0) > bar * s0) {
+    sigma = {std::clamp(sigma.x, 0.6, widest), std::clamp(sigma.y, 0.6, widest)};
     double hx = p.x;
     double hy = p.y;
-    if (gaussian_pass<Pixel>(element, f, hx, hy, sigma)) {
+    if (gaussian_pass<Pixel>(element, f, hx, hy, sigma, per_axis)) {
       gx = hx;
       gy = hy;
     }
@@ -581,7 +606,10 @@ Vec2 Extractor::centroid(std::size_t element, const ImageView& f, const detail::
       break;
     }
     case CentroidEstimator::kGaussian:
-      gaussian_refine<Pixel>(element, f, m, g, p);
+      gaussian_refine<Pixel>(element, f, m, g, false, p);
+      break;
+    case CentroidEstimator::kGaussianAxes:
+      gaussian_refine<Pixel>(element, f, m, g, true, p);
       break;
   }
   return p;

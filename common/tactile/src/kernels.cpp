@@ -304,9 +304,9 @@ template <typename Pixel>
     std::memcpy(v + first - kGaussPad, kZeros, sizeof kZeros);
     std::memcpy(v + end, kZeros, sizeof kZeros);
   }
-  gaussian_weights<true>(w.col_lo, end - first, w.cx, w.a, w.wx + first, w.wxu + first,
+  gaussian_weights<true>(w.col_lo, end - first, w.cx, w.a_x, w.wx + first, w.wxu + first,
                          w.wxu2 + first);
-  gaussian_weights<false>(w.row_lo, w.row_hi - w.row_lo + 1, w.cy, w.a, w.wy, nullptr, nullptr);
+  gaussian_weights<false>(w.row_lo, w.row_hi - w.row_lo + 1, w.cy, w.a_y, w.wy, nullptr, nullptr);
   const std::int32_t* ref = data.ref;
   // Columns of the block to read: the window, widened to whole groups of 16 (weights outside
   // the window are 0).

@@ -2,9 +2,9 @@
 
 // The per-pixel loops of the measurement. Two implementations of each: portable C++ (plain
 // loops and the compiler's generic vector types, compiled for any x86-64 and cloned for
-// x86-64-v3), and AVX2 intrinsics for 8-bit pixels (x86-64 only, chosen at run time when the
-// processor has AVX2 and FMA). The integer kernels of both give identical results (tests compare
-// them); the floating-point one differs only in rounding. Every function here is noexcept,
+// x86-64-v3), and AVX2 intrinsics for 8- and 16-bit pixels (x86-64 only, chosen at run time when
+// the processor has AVX2 and FMA). The integer kernels of both give identical results (tests
+// compare them); the floating-point one differs only in rounding. Every function here is noexcept,
 // allocates nothing and reads only the block it is given.
 #include <bit>
 #include <cstddef>
@@ -94,12 +94,12 @@ enum class MomentKind : std::uint8_t {
 // Sums of the Gaussian-weighted score of one element over the block rows [row_lo, row_hi]
 // (image rows) and the block columns that meet [col_lo, col_hi], with the raw increment
 // d = 256 p - ref of the disk's pixels (negative values included): with u = x - cx, v = y - cy
-// and separable weights W = wx(x) wy(y), wx(x) = exp(-a u^2), wy(y) = exp(-a v^2),
+// and separable weights W = wx(x) wy(y), wx(x) = exp(-a_x u^2), wy(y) = exp(-a_y v^2),
 //   s0 = sum d W, s1x = sum d W u, s2x = sum d W u^2, s1y = sum d W v, s2y = sum d W v^2.
 // The kernels compute the weights themselves, in the scratch arrays as far as they need them:
 // wx, wxu and wxu2 one value per block column, with kGaussPad writable columns either side (at
 // least block width + 2 kGaussPad floats from wx - kGaussPad); wy one per window row plus
-// kGaussPad. The window keeps -a u^2 >= -72 (reach at most 12 sigmas).
+// kGaussPad. The window keeps -a_x u^2 >= -72 and -a_y v^2 >= -72 (reach at most 12 sigmas).
 inline constexpr int kGaussPad = 16;
 struct GaussSums {
   double s0 = 0, s1x = 0, s2x = 0, s1y = 0, s2y = 0;
@@ -111,7 +111,8 @@ struct GaussWindow {
   int col_hi;
   double cx;
   double cy;
-  double a;
+  double a_x;  // 1 / (2 sigma_x^2) of the weight along the columns
+  double a_y;  // along the rows
   float* wx;
   float* wxu;
   float* wxu2;
@@ -155,8 +156,8 @@ struct KernelSet {
 
 // The portable implementation: always there.
 const KernelSet& portable_kernels() noexcept;
-// The AVX2 implementation of the 8-bit kernels (16-bit ones are the portable ones), or nullptr
-// where the build or the processor does not have AVX2 and FMA.
+// The AVX2 implementation (blocks it does not take, such as odd widths, go to the portable
+// kernels), or nullptr where the build or the processor does not have AVX2 and FMA.
 const KernelSet* avx2_kernels() noexcept;
 // The fastest implementation this processor runs.
 const KernelSet& best_kernels() noexcept;

@@ -1,10 +1,11 @@
-// AVX2 kernels for 8-bit pixels, compiled for AVX2 and FMA by function attribute only (the build
-// has no -mavx2), and used only where the processor has both (best_kernels()).
+// AVX2 kernels for 8- and 16-bit pixels, compiled for AVX2 and FMA by function attribute only (the
+// build has no -mavx2), and used only where the processor has both (best_kernels()).
 //
 // Exact G and the thresholded moments come from one pass in 8-bit lanes, 32 pixels at a time:
 // s = max(p - hi, 0) is one saturating subtract; sums of s and of the fractions lo are SAD
 // instructions; sums of s * column are byte multiply-adds (column < 32 within a group of 32,
-// the group's start added through the group's sum of s). Everything is exact.
+// the group's start added through the group's sum of s). Everything is exact. 16-bit pixels have
+// their own pass (pass16, below); the Gaussian sums share one body for both depths.
 #include "kernels.hpp"
 #include "tactile/detail/multiversion.hpp"
 
@@ -36,6 +37,12 @@ TACTILE_AVX2_INLINE std::int32_t max_u8(__m256i v) noexcept {
   m = _mm_max_epu8(m, _mm_srli_si128(m, 2));
   m = _mm_max_epu8(m, _mm_srli_si128(m, 1));
   return _mm_cvtsi128_si32(m) & 0xFF;
+}
+
+// The next row of a frame, stride bytes on.
+template <typename Pixel>
+TACTILE_AVX2_INLINE const Pixel* next_row(const Pixel* p, std::size_t stride) noexcept {
+  return reinterpret_cast<const Pixel*>(reinterpret_cast<const std::uint8_t*>(p) + stride);
 }
 
 struct Sums8 {
@@ -194,6 +201,156 @@ TACTILE_AVX2 Moments moments_u8(const Block& b, const FrameRef& f, const BlockDa
   return to_moments(pass8<true, false>(b, f, d.thr_hi8, d.thr_lo));
 }
 
+// --- 16-bit pixels ------------------------------------------------------------------------------
+//
+// One pass in 16-bit lanes, 16 pixels at a time, over a block kV vectors wide: s = max(p - hi, 0)
+// is one saturating subtract, the fraction lo (widened from bytes) kept where s > 0. Sums are
+// 16-bit multiply-adds into 32-bit lanes. Those are signed and s reaches 65535, so they take
+// s' = s - 32768 (s with its top bit flipped): each sum then falls short of the true one by what
+// the same sums give for s = 0, a per-row constant put back at the end. Every 32-bit lane is
+// summed modulo 2^32 and its true value stays below 2^32 (fits_pass16), so the lane sums come out
+// exact, and so do their 64-bit totals. The row moments come from running sums as in the 8-bit
+// pass: sum_r r s_r = H S - sum_r T_r. Exact like the portable loops.
+//
+// Whether pass16 takes the block: 32 or 64 columns (the blocks of every disk up to 64 pixels
+// across; narrower ones arise only where the region of all disks is narrower, and take the
+// portable loops), and few enough rows that a lane's sum of T_r, at most
+// H (H + 1) / 2 x kV x 2 x 65535, stays below 2^32 (H up to 127 rows at 32 columns, 90 at 64:
+// more than a disk that fits the block's width has).
+bool fits_pass16(const Block& b) noexcept {
+  const int v = b.width / 16;
+  return (b.width == 32 || b.width == 64) &&
+         static_cast<std::int64_t>(b.height) * (b.height + 1) * v < 32768;
+}
+
+// Sum of eight 32-bit lanes, each corrected by -k x bias (modulo 2^32), in 64 bits.
+TACTILE_AVX2_INLINE std::uint64_t lanes_minus(__m256i acc, __m256i bias, std::uint32_t k) noexcept {
+  alignas(32) std::uint32_t a[8];
+  alignas(32) std::uint32_t c[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(a), acc);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(c), bias);
+  std::uint64_t sum = 0;
+  for (int j = 0; j < 8; ++j)
+    sum += static_cast<std::uint32_t>(a[j] - k * c[j]);
+  return sum;
+}
+
+template <int kV, bool kMoments, bool kCount, bool kFractions>
+TACTILE_AVX2_INLINE Sums8 pass16(const Block& b, const FrameRef& f, const std::uint16_t* hi,
+                                 const std::uint8_t* lo) noexcept {
+  const __m256i zero = _mm256_setzero_si256();
+  const __m256i flip = _mm256_set1_epi16(static_cast<short>(0x8000));
+  const __m256i ones = _mm256_set1_epi16(1);
+  __m256i col[kV];
+  for (int v = 0; v < kV; ++v) {
+    col[v] =
+        _mm256_add_epi16(_mm256_set1_epi16(static_cast<short>(16 * v)),
+                         _mm256_setr_epi16(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15));
+  }
+  __m256i acc_s = zero;   // sum of s' pairs
+  __m256i acc_sx = zero;  // sum of s' x column
+  __m256i acc_ts = zero;  // sum over rows of acc_s: the running T_r
+  __m256i acc_l = zero;
+  __m256i acc_lx = zero;
+  __m256i acc_tl = zero;
+  __m256i peak = zero;
+  std::int64_t above = 0;
+  const std::uint16_t* p = f.pixel<std::uint16_t>(b.x0, b.y0);
+  const std::uint16_t* h = hi + b.offset;
+  const std::uint8_t* l = lo + b.offset;
+  for (int r = 0; r < b.height; ++r, p = next_row(p, f.stride), h += 16 * kV, l += 16 * kV) {
+    for (int v = 0; v < kV; ++v) {
+      const __m256i pv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + 16 * v));
+      const __m256i hv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h + 16 * v));
+      const __m256i lv =
+          _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(l + 16 * v)));
+      const __m256i s = _mm256_subs_epu16(pv, hv);
+      const __m256i none = _mm256_cmpeq_epi16(s, zero);
+      const __m256i lm = _mm256_andnot_si256(none, lv);
+      const __m256i sf = _mm256_xor_si256(s, flip);
+      acc_s = _mm256_add_epi32(acc_s, _mm256_madd_epi16(sf, ones));
+      acc_l = _mm256_add_epi32(acc_l, _mm256_madd_epi16(lm, ones));
+      if constexpr (kMoments) {
+        peak = _mm256_max_epu16(peak, s);
+        acc_sx = _mm256_add_epi32(acc_sx, _mm256_madd_epi16(sf, col[v]));
+        if constexpr (kFractions) acc_lx = _mm256_add_epi32(acc_lx, _mm256_madd_epi16(lm, col[v]));
+      }
+      if constexpr (kCount) {
+        above += 16 - __builtin_popcount(static_cast<unsigned>(_mm256_movemask_epi8(none))) / 2;
+      }
+    }
+    if constexpr (kMoments) {
+      acc_ts = _mm256_add_epi32(acc_ts, acc_s);
+      if constexpr (kFractions) acc_tl = _mm256_add_epi32(acc_tl, acc_l);
+    }
+  }
+  // What the sums of s' give for s = 0, per row, lane by lane.
+  __m256i bias_s = zero;
+  __m256i bias_sx = zero;
+  for (int v = 0; v < kV; ++v) {
+    bias_s = _mm256_add_epi32(bias_s, _mm256_madd_epi16(flip, ones));
+    bias_sx = _mm256_add_epi32(bias_sx, _mm256_madd_epi16(flip, col[v]));
+  }
+  const auto rows = static_cast<std::uint32_t>(b.height);
+  Sums8 out;
+  out.s = lanes_minus(acc_s, bias_s, rows);
+  out.lo = lanes_minus(acc_l, zero, 0);
+  if constexpr (kMoments) {
+    out.sx = lanes_minus(acc_sx, bias_sx, rows);
+    out.lx = lanes_minus(acc_lx, zero, 0);
+    // The running sums fell short by (r + 1) x bias after row r: H (H + 1) / 2 x bias in all.
+    out.sy = rows * out.s - lanes_minus(acc_ts, bias_s, rows * (rows + 1) / 2);
+    out.ly = rows * out.lo - lanes_minus(acc_tl, zero, 0);
+    __m128i m = _mm_max_epu16(_mm256_castsi256_si128(peak), _mm256_extracti128_si256(peak, 1));
+    m = _mm_max_epu16(m, _mm_srli_si128(m, 8));
+    m = _mm_max_epu16(m, _mm_srli_si128(m, 4));
+    m = _mm_max_epu16(m, _mm_srli_si128(m, 2));
+    out.peak = _mm_cvtsi128_si32(m) & 0xFFFF;
+  }
+  out.above = above;
+  return out;
+}
+
+template <bool kMoments, bool kCount, bool kFractions = true>
+TACTILE_AVX2_INLINE Sums8 pass16_any(const Block& b, const FrameRef& f, const std::uint16_t* hi,
+                                     const std::uint8_t* lo) noexcept {
+  if (b.width == 32) return pass16<2, kMoments, kCount, kFractions>(b, f, hi, lo);
+  return pass16<4, kMoments, kCount, kFractions>(b, f, hi, lo);
+}
+
+TACTILE_AVX2 GSum exact_g_u16(const Block& b, const FrameRef& f, const BlockData& d) noexcept {
+  if (!fits_pass16(b)) return portable_kernels().exact_g_u16(b, f, d);
+  const Sums8 s = pass16_any<false, false, false>(b, f, d.thr_hi16, d.thr_lo);
+  return {s.s, s.lo};
+}
+
+TACTILE_AVX2 Moments moments_u16(const Block& b, const FrameRef& f, const BlockData& d,
+                                 MomentKind kind) noexcept {
+  // kPlain's centroid weights need the reference split, which 16-bit sensors do not keep.
+  if (!fits_pass16(b) || kind == MomentKind::kPlain) {
+    return portable_kernels().moments_u16(b, f, d, kind);
+  }
+  const Sums8 s =
+      kind == MomentKind::kThresholdedCount ? pass16_any<true, true>(b, f, d.thr_hi16, d.thr_lo)
+      : kind == MomentKind::kStart ? pass16_any<true, false, false>(b, f, d.thr_hi16, d.thr_lo)
+                                   : pass16_any<true, false>(b, f, d.thr_hi16, d.thr_lo);
+  Moments m;
+  m.g = static_cast<std::int64_t>(256 * s.s - s.lo);
+  m.peak = s.peak;
+  m.above = s.above;
+  if (kind == MomentKind::kStart) {
+    // Whole gray levels above the threshold: s itself.
+    m.c0 = static_cast<std::int64_t>(s.s);
+    m.cx = static_cast<std::int64_t>(s.sx);
+    m.cy = static_cast<std::int64_t>(s.sy);
+  } else {
+    m.c0 = m.g;
+    m.cx = static_cast<std::int64_t>(256 * s.sx - s.lx);
+    m.cy = static_cast<std::int64_t>(256 * s.sy - s.ly);
+  }
+  return m;
+}
+
 TACTILE_AVX2_INLINE double hsum(__m256 v) noexcept {
   const __m128 s = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
   const __m128 t = _mm_add_ps(s, _mm_movehl_ps(s, s));
@@ -234,6 +391,29 @@ TACTILE_AVX2_INLINE __m256 increments8(const std::uint8_t* p, const std::uint16_
   return _mm256_cvtepi32_ps(_mm256_andnot_si256(_mm256_cmpeq_epi32(rv, outside), dv));
 }
 
+// The same for 16-bit pixels, against the 32-bit reference (kOutsideDisk outside the disk). In
+// the disk |d| < 2^24: exact as a float, as the portable kernel's is.
+template <bool kMasked>
+TACTILE_AVX2_INLINE __m256 increments8(const std::uint16_t* p, const std::int32_t* rf, int k,
+                                       __m256i outside) noexcept {
+  const __m256i pv =
+      _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p + k)));
+  const __m256i rv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rf + k));
+  const __m256i dv = _mm256_sub_epi32(_mm256_slli_epi32(pv, 8), rv);
+  if constexpr (!kMasked) return _mm256_cvtepi32_ps(dv);
+  return _mm256_cvtepi32_ps(_mm256_andnot_si256(_mm256_cmpeq_epi32(rv, outside), dv));
+}
+
+// The reference the Gaussian kernels read, and its mark outside the disk, per pixel type.
+TACTILE_AVX2_INLINE const std::uint16_t* gauss_ref(const BlockData& d, std::uint8_t /*tag*/) {
+  return d.ref16;
+}
+TACTILE_AVX2_INLINE const std::int32_t* gauss_ref(const BlockData& d, std::uint16_t /*tag*/) {
+  return d.ref;
+}
+template <typename Pixel>
+constexpr std::int32_t kRefOutside = sizeof(Pixel) == 1 ? 65535 : kOutsideDisk;
+
 // Column weights of the group of 8 from block column k: exp(-a u^2) inside the window
 // [first, end), 0 outside; u, from the column's centre to the window's centre.
 TACTILE_AVX2_INLINE __m256 column_weights(const Block& b, const GaussWindow& w, int k, int first,
@@ -243,7 +423,7 @@ TACTILE_AVX2_INLINE __m256 column_weights(const Block& b, const GaussWindow& w, 
   const __m256i in = _mm256_and_si256(_mm256_cmpgt_epi32(col, _mm256_set1_epi32(first - 1)),
                                       _mm256_cmpgt_epi32(_mm256_set1_epi32(end), col));
   u = _mm256_add_ps(_mm256_set1_ps(static_cast<float>(b.x0 + k - w.cx)), _mm256_cvtepi32_ps(lane));
-  const __m256 e = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(-static_cast<float>(w.a)), u), u);
+  const __m256 e = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(-static_cast<float>(w.a_x)), u), u);
   return _mm256_and_ps(exp8_nonpositive(e), _mm256_castsi256_ps(in));
 }
 
@@ -253,11 +433,11 @@ TACTILE_AVX2_INLINE __m256 column_weights(const Block& b, const GaussWindow& w, 
 // row weights are in w.wy. Without kMasked every pixel of the window must lie in the disk: the
 // groups' columns outside the window may not, but their increments are finite and their
 // column weights exactly 0.
-template <int kGroups, bool kMasked>
+template <typename Pixel, int kGroups, bool kMasked>
 TACTILE_AVX2_INLINE GaussSums gauss_columns(const Block& b, const FrameRef& f, const BlockData& d,
                                             const GaussWindow& w, int c_lo, int first,
                                             int end) noexcept {
-  const __m256i outside = _mm256_set1_epi32(65535);
+  const __m256i outside = _mm256_set1_epi32(kRefOutside<Pixel>);
   __m256 c0[kGroups];
   __m256 c1[kGroups];
   __m256 c2[kGroups];
@@ -266,13 +446,12 @@ TACTILE_AVX2_INLINE GaussSums gauss_columns(const Block& b, const FrameRef& f, c
     c1[g] = _mm256_setzero_ps();
     c2[g] = _mm256_setzero_ps();
   }
-  const std::uint8_t* p = f.pixel<std::uint8_t>(b.x0, w.row_lo);
-  const std::uint16_t* rf =
-      d.ref16 + b.offset +
-      static_cast<std::size_t>(w.row_lo - b.y0) * static_cast<std::size_t>(b.width);
+  const Pixel* p = f.pixel<Pixel>(b.x0, w.row_lo);
+  const auto* rf = gauss_ref(d, Pixel{}) + b.offset +
+                   static_cast<std::size_t>(w.row_lo - b.y0) * static_cast<std::size_t>(b.width);
   const auto v0 = static_cast<float>(w.row_lo - w.cy);
   const int rows = w.row_hi - w.row_lo + 1;
-  for (int j = 0; j < rows; ++j, p += f.stride, rf += b.width) {
+  for (int j = 0; j < rows; ++j, p = next_row(p, f.stride), rf += b.width) {
     const float wy = w.wy[j];
     const float v = v0 + static_cast<float>(j);
     const __m256 b0 = _mm256_set1_ps(wy);
@@ -304,17 +483,17 @@ TACTILE_AVX2_INLINE GaussSums gauss_columns(const Block& b, const FrameRef& f, c
 }
 
 // gauss_columns without the outside test where the window lies in the disk.
-template <int kGroups>
+template <typename Pixel, int kGroups>
 TACTILE_AVX2_INLINE GaussSums gauss_columns_either(const Block& b, const FrameRef& f,
                                                    const BlockData& d, const GaussWindow& w,
                                                    int c_lo, int first, int end) noexcept {
-  return w.inside_disk ? gauss_columns<kGroups, false>(b, f, d, w, c_lo, first, end)
-                       : gauss_columns<kGroups, true>(b, f, d, w, c_lo, first, end);
+  return w.inside_disk ? gauss_columns<Pixel, kGroups, false>(b, f, d, w, c_lo, first, end)
+                       : gauss_columns<Pixel, kGroups, true>(b, f, d, w, c_lo, first, end);
 }
 
-TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockData& d,
-                                const GaussWindow& w) noexcept {
-  if (b.width % 8 != 0) return portable_kernels().gauss_u8(b, f, d, w);
+template <typename Pixel>
+TACTILE_AVX2_INLINE GaussSums gauss_any(const Block& b, const FrameRef& f, const BlockData& d,
+                                        const GaussWindow& w) noexcept {
   // Groups of 8 from the window's first column (unaligned), moved left where the last group
   // would leave the block; the column weights are computed for exactly those groups, 0 outside
   // the window. The row weights go to w.wy first.
@@ -324,7 +503,7 @@ TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockDa
   const int c_lo = std::max(0, std::min(first, b.width - 8 * groups));
   const int c_hi = std::min(b.width, c_lo + 8 * groups);
   {
-    const __m256 minus_a = _mm256_set1_ps(-static_cast<float>(w.a));
+    const __m256 minus_a = _mm256_set1_ps(-static_cast<float>(w.a_y));
     const __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
     const int rows = w.row_hi - w.row_lo + 1;
     const auto v_lo = static_cast<float>(w.row_lo - w.cy);
@@ -340,16 +519,16 @@ TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockDa
     GaussSums part;
     switch (std::min(4, (c_hi - c) / 8)) {
       case 1:
-        part = gauss_columns_either<1>(b, f, d, w, c, first, end);
+        part = gauss_columns_either<Pixel, 1>(b, f, d, w, c, first, end);
         break;
       case 2:
-        part = gauss_columns_either<2>(b, f, d, w, c, first, end);
+        part = gauss_columns_either<Pixel, 2>(b, f, d, w, c, first, end);
         break;
       case 3:
-        part = gauss_columns_either<3>(b, f, d, w, c, first, end);
+        part = gauss_columns_either<Pixel, 3>(b, f, d, w, c, first, end);
         break;
       default:
-        part = gauss_columns_either<4>(b, f, d, w, c, first, end);
+        part = gauss_columns_either<Pixel, 4>(b, f, d, w, c, first, end);
         break;
     }
     out.s0 += part.s0;
@@ -361,16 +540,23 @@ TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockDa
   return out;
 }
 
+TACTILE_AVX2 GaussSums gauss_u8(const Block& b, const FrameRef& f, const BlockData& d,
+                                const GaussWindow& w) noexcept {
+  if (b.width % 8 != 0) return portable_kernels().gauss_u8(b, f, d, w);
+  return gauss_any<std::uint8_t>(b, f, d, w);
+}
+
+TACTILE_AVX2 GaussSums gauss_u16(const Block& b, const FrameRef& f, const BlockData& d,
+                                 const GaussWindow& w) noexcept {
+  if (b.width % 8 != 0) return portable_kernels().gauss_u16(b, f, d, w);
+  return gauss_any<std::uint16_t>(b, f, d, w);
+}
+
 }  // namespace
 
 const KernelSet* avx2_kernels() noexcept {
-  static const KernelSet kSet{"avx2",
-                              exact_g_u8,
-                              portable_kernels().exact_g_u16,
-                              moments_u8,
-                              portable_kernels().moments_u16,
-                              gauss_u8,
-                              portable_kernels().gauss_u16};
+  static const KernelSet kSet{"avx2",      exact_g_u8, exact_g_u16, moments_u8,
+                              moments_u16, gauss_u8,   gauss_u16};
   return cpu_has_avx2_fma() ? &kSet : nullptr;
 }
 

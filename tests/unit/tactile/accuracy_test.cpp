@@ -2,7 +2,10 @@
 // peak 30 to 150 gray levels over a vignetted background, pixel noise sigma 2 and a reference of
 // 16 frames, the default estimator's centroid RMS error is at most 1.5 times the Cramer-Rao
 // bound, its bias at most 0.005 px, contact is detected exactly and forces follow the curves.
-// The same in 16 bits. Fixed seeds: the figures are the same on every run.
+// The same in 16 bits. Issue 38: on elliptical spots (aspect 2) kGaussianAxes is within 1.1 times
+// the bound per axis and clearly better than kGaussian's round weight; on flat-topped spots (a
+// plateau with Gaussian shoulders) both stay where they are today. Fixed seeds: the figures are
+// the same on every run.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -18,12 +21,33 @@ struct Setting {
   int bit_depth;
   double sigma;
   double peak;
+  testing::SpotShape shape = testing::SpotShape::kGaussian;
+  double aspect = 1;  // kElliptical: sigma along y over sigma along x
+  CentroidEstimator estimator = ExtractorOptions{}.estimator;
 };
 
+// Cramer-Rao bound per axis for one frame in white noise, from the spot's continuous profile
+// (no pixelation, no reference noise): sigma_n / sqrt(I) with the Fisher information
+// I = (A / sigma_n)^2 * integral of (df/dx)^2 over the plane, f the profile of peak 1.
+//   Gaussian, widths sx, sy: along x I = (A / sigma_n)^2 pi sy / (2 sx).
+//   Plateau of radius R with Gaussian shoulders sigma: I = (A / sigma_n)^2 pi (1/2 + R sqrt(pi)
+//   / (4 sigma)) along either axis. R = 0 and sx = sy give the textbook sqrt(2 / pi) sigma_n / A.
+Vec2 simple_bound(const Setting& s, double noise_sigma) {
+  const double a = s.peak / noise_sigma;
+  if (s.shape == testing::SpotShape::kFlatTop) {
+    const double i = a * a * M_PI * (0.5 + 3.0 * std::sqrt(M_PI) / (4 * s.sigma));
+    return {1 / std::sqrt(i), 1 / std::sqrt(i)};
+  }
+  const double sx = s.sigma;
+  const double sy = s.shape == testing::SpotShape::kElliptical ? s.aspect * s.sigma : s.sigma;
+  return {1 / std::sqrt(a * a * M_PI * sy / (2 * sx)), 1 / std::sqrt(a * a * M_PI * sx / (2 * sy))};
+}
+
 struct Stats {
-  double rms = 0;   // worse axis, px
-  double bias = 0;  // worst of |mean error| and |pull toward the disk centre over 1 px|
-  double crb = 0;   // per axis, px
+  double rms = 0;    // worse axis, px
+  double bias = 0;   // worst of |mean error| and |pull toward the disk centre over 1 px|
+  double crb = 0;    // per axis, px (the larger)
+  double ratio = 0;  // worse axis of RMS error over that axis's bound
   int contact_errors = 0;
   int samples = 0;
 };
@@ -47,11 +71,19 @@ Stats run(const Setting& s, int frames, std::uint64_t seed) {
   testing::SceneOptions o;
   o.bit_depth = s.bit_depth;
   o.noise_sigma = 2.0;
-  Calibration cal = testing::grid_calibration(o, 8, 5, 60.0, 14.0);
+  // Disks hold the spot out to 3.5 of its widths (elliptical aspect 2: sigma_y up to 4 px).
+  const double radius = s.shape == testing::SpotShape::kGaussian ? 14.0 : 18.0;
+  Calibration cal = testing::grid_calibration(o, 8, 5, 60.0, radius);
   const double scale = testing::level_scale(s.bit_depth);
   cal.contact_on = 150 * scale;  // the faintest spot here (sigma 1.5, peak 30) gives G ~ 250
   cal.contact_off = 80 * scale;
-  ExtractorOptions opt;  // default estimator
+  if (s.shape != testing::SpotShape::kGaussian) {
+    // The larger disks' noise alone comes near 150; the faintest shape here gives G ~ 1400.
+    cal.contact_on = 500 * scale;
+    cal.contact_off = 300 * scale;
+  }
+  ExtractorOptions opt;
+  opt.estimator = s.estimator;
   opt.reference_frames = 16;
   Extractor ex(cal, opt);
 
@@ -79,7 +111,10 @@ Stats run(const Setting& s, int frames, std::uint64_t seed) {
       pressed[e] = ((e + static_cast<std::size_t>(f)) % 4) != 0;  // a quarter stay untouched
       if (!pressed[e]) continue;
       truth[e] = cal.elements[e].center_px + Vec2{rng.uniform(-1, 1), rng.uniform(-1, 1)};
-      spots.push_back({truth[e], s.peak, s.sigma});
+      testing::Spot spot{truth[e], s.peak, s.sigma};
+      spot.shape = s.shape;
+      spot.sigma_y = s.aspect * s.sigma;
+      spots.push_back(spot);
     }
     scene.render(spots, rng, img);
     // Each frame on its own (no displacement needed here).
@@ -105,7 +140,9 @@ Stats run(const Setting& s, int frames, std::uint64_t seed) {
   st.samples = static_cast<int>(ex_err.size());
   st.rms = std::sqrt(std::max(sx, sy) / n);
   st.bias = std::max(bias_of(ex_err, ox), bias_of(ey_err, oy));
-  st.crb = std::sqrt(2.0 / M_PI) * o.noise_sigma / s.peak;
+  const Vec2 crb = simple_bound(s, o.noise_sigma);
+  st.crb = std::max(crb.x, crb.y);
+  st.ratio = std::max(std::sqrt(sx / n) / crb.x, std::sqrt(sy / n) / crb.y);
   return st;
 }
 
@@ -143,6 +180,69 @@ INSTANTIATE_TEST_SUITE_P(GaussianSpots, Accuracy, ::testing::ValuesIn(settings()
                                   std::to_string(static_cast<int>(p.param.sigma * 10)) + "_peak" +
                                   std::to_string(static_cast<int>(p.param.peak));
                          });
+
+// Issue 38: spots that are not round Gaussians, measured by kGaussian and kGaussianAxes on the
+// same frames (the same seed draws the same spots and noise).
+struct ShapeSetting {
+  testing::SpotShape shape;
+  double sigma;
+  double aspect;
+  double peak;  // noise sigma 2: peak-to-noise 25 and 75
+};
+
+Stats run_shape(const ShapeSetting& s, CentroidEstimator e) {
+  const Setting setting{8, s.sigma, s.peak, s.shape, s.aspect, e};
+  // Enough frames that the fitted pull's standard error is about 0.0007 px (the error's spread
+  // falls with the peak): 450 frames at peak-to-noise 25, 50 at 75.
+  const int frames = std::max(50, static_cast<int>(450 * (50 / s.peak) * (50 / s.peak)));
+  return run(setting, frames, static_cast<std::uint64_t>(100 * s.sigma + s.aspect * 10 + s.peak));
+}
+
+void print(const char* what, const ShapeSetting& s, const Stats& st) {
+  std::printf(
+      "%-13s %s sigma %.1f aspect %.1f peak %5.1f: rms %.4f px = %.3f x CRB, bias %.4f px, "
+      "%d samples\n",
+      what, s.shape == testing::SpotShape::kFlatTop ? "flat-top  " : "elliptical", s.sigma,
+      s.aspect, s.peak, st.rms, st.ratio, st.bias, st.samples);
+}
+
+class ShapeAccuracy : public ::testing::TestWithParam<ShapeSetting> {};
+
+TEST_P(ShapeAccuracy, PerAxisWidthsHoldOnEllipticalSpots) {
+  const ShapeSetting s = GetParam();
+  const Stats round = run_shape(s, CentroidEstimator::kGaussian);
+  const Stats axes = run_shape(s, CentroidEstimator::kGaussianAxes);
+  print("gaussian", s, round);
+  print("gaussian-axes", s, axes);
+  EXPECT_EQ(axes.contact_errors, 0);
+  EXPECT_LE(axes.bias, 0.002);
+  if (s.shape == testing::SpotShape::kElliptical) {
+    // The bound here leaves out the reference's own noise (16 frames: 3 %) and pixelation.
+    EXPECT_LE(axes.ratio, 1.1);
+    EXPECT_LE(axes.rms, (s.aspect >= 2 ? 0.93 : 0.99) * round.rms);
+  } else {
+    // Flat-topped spots: no Gaussian weight is matched to them (docs/benchmarks.md, issue 38).
+    // Both estimators stay within a third of the bound, and per-axis widths cost little.
+    EXPECT_LE(round.ratio, 1.35);
+    EXPECT_LE(axes.ratio, 1.35);
+    EXPECT_LE(axes.rms, 1.05 * round.rms);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Shapes, ShapeAccuracy,
+    ::testing::Values(ShapeSetting{testing::SpotShape::kElliptical, 1.5, 2.0, 50},
+                      ShapeSetting{testing::SpotShape::kElliptical, 2.0, 2.0, 150},
+                      ShapeSetting{testing::SpotShape::kElliptical, 2.0, 1.5, 50},
+                      ShapeSetting{testing::SpotShape::kFlatTop, 1.5, 1.0, 50},
+                      ShapeSetting{testing::SpotShape::kFlatTop, 2.5, 1.0, 150}),
+    [](const ::testing::TestParamInfo<ShapeSetting>& p) {
+      return std::string(p.param.shape == testing::SpotShape::kFlatTop ? "flat_top"
+                                                                       : "elliptical") +
+             "_sigma" + std::to_string(static_cast<int>(p.param.sigma * 10)) + "_aspect" +
+             std::to_string(static_cast<int>(p.param.aspect * 10)) + "_peak" +
+             std::to_string(static_cast<int>(p.param.peak));
+    });
 
 }  // namespace
 }  // namespace tactile

@@ -12,8 +12,9 @@ namespace {
 
 TEST(Allocation, MeasureAllocatesNothing) {
   for (int depth : {8, 16}) {
-    for (CentroidEstimator est : {CentroidEstimator::kPlain, CentroidEstimator::kThresholded,
-                                  CentroidEstimator::kWindowed, CentroidEstimator::kGaussian}) {
+    for (CentroidEstimator est :
+         {CentroidEstimator::kPlain, CentroidEstimator::kThresholded, CentroidEstimator::kWindowed,
+          CentroidEstimator::kGaussian, CentroidEstimator::kGaussianAxes}) {
       testing::SceneOptions o;
       o.bit_depth = depth;
       const Calibration cal = testing::grid_calibration(o, 8, 5, 60, 14);
@@ -79,7 +80,8 @@ TEST(Allocation, EveryPerFramePathAllocatesNothing) {
     const Image wrong(100, 100, frames[0].format());  // holds no disk: refused
     for (bool portable : {false, true}) {
       for (CentroidEstimator est : {CentroidEstimator::kPlain, CentroidEstimator::kThresholded,
-                                    CentroidEstimator::kWindowed, CentroidEstimator::kGaussian}) {
+                                    CentroidEstimator::kWindowed, CentroidEstimator::kGaussian,
+                                    CentroidEstimator::kGaussianAxes}) {
         ExtractorOptions opt;
         opt.estimator = est;
         opt.reference_frames = 2;

@@ -91,12 +91,12 @@ TEST_P(SubPixelSpots, NoiselessCentroidIsExactToQuantisation) {
   expect_all_finite(ex);
 }
 
-INSTANTIATE_TEST_SUITE_P(DepthsAndEstimators, SubPixelSpots,
-                         ::testing::Combine(::testing::Values(8, 16),
-                                            ::testing::Values(CentroidEstimator::kPlain,
-                                                              CentroidEstimator::kThresholded,
-                                                              CentroidEstimator::kWindowed,
-                                                              CentroidEstimator::kGaussian)));
+INSTANTIATE_TEST_SUITE_P(
+    DepthsAndEstimators, SubPixelSpots,
+    ::testing::Combine(::testing::Values(8, 16),
+                       ::testing::Values(CentroidEstimator::kPlain, CentroidEstimator::kThresholded,
+                                         CentroidEstimator::kWindowed, CentroidEstimator::kGaussian,
+                                         CentroidEstimator::kGaussianAxes)));
 
 TEST(Extractor, AllZeroFramesGiveNoContactAndFiniteValues) {
   const SceneOptions o = small_scene();
@@ -134,8 +134,9 @@ TEST(Extractor, OneBrightPixelIsItsOwnCentroid) {
   Calibration cal = small_calibration(o);
   cal.contact_on = 100;
   cal.contact_off = 50;
-  for (CentroidEstimator est : {CentroidEstimator::kPlain, CentroidEstimator::kThresholded,
-                                CentroidEstimator::kWindowed, CentroidEstimator::kGaussian}) {
+  for (CentroidEstimator est :
+       {CentroidEstimator::kPlain, CentroidEstimator::kThresholded, CentroidEstimator::kWindowed,
+        CentroidEstimator::kGaussian, CentroidEstimator::kGaussianAxes}) {
     ExtractorOptions opt;
     opt.estimator = est;
     Extractor ex = with_reference(cal, constant(o, 20), opt);

@@ -15,7 +15,8 @@ using testing::SceneOptions;
 using testing::Spot;
 
 constexpr CentroidEstimator kAll[] = {CentroidEstimator::kPlain, CentroidEstimator::kThresholded,
-                                      CentroidEstimator::kWindowed, CentroidEstimator::kGaussian};
+                                      CentroidEstimator::kWindowed, CentroidEstimator::kGaussian,
+                                      CentroidEstimator::kGaussianAxes};
 
 SceneOptions scene(int depth) {
   SceneOptions o;
@@ -113,7 +114,7 @@ TEST(FastPath, NoContactOnsetIsMissed) {
   }
 }
 
-// The readings of the AVX2 and the portable kernels: the same, but for kGaussian's
+// The readings of the AVX2 and the portable kernels: the same, but for the Gaussian estimators'
 // floating-point rounding.
 void expect_same_readings(const Extractor& fast, const Extractor& portable, CentroidEstimator est,
                           std::uint64_t frame) {
@@ -122,7 +123,7 @@ void expect_same_readings(const Extractor& fast, const Extractor& portable, Cent
     const ElementReading& b = portable.readings()[i];
     ASSERT_EQ(a.contact, b.contact) << "frame " << frame << " element " << i;
     ASSERT_EQ(a.G, b.G) << "frame " << frame << " element " << i;
-    if (est == CentroidEstimator::kGaussian) {
+    if (est == CentroidEstimator::kGaussian || est == CentroidEstimator::kGaussianAxes) {
       ASSERT_NEAR(a.x_px, b.x_px, 1e-4) << "frame " << frame << " element " << i;
       ASSERT_NEAR(a.y_px, b.y_px, 1e-4) << "frame " << frame << " element " << i;
     } else {

@@ -265,7 +265,8 @@ TEST_P(Stress, RandomCalibrationsFramesAndSequences) {
         ASSERT_EQ(a[i].contact, b[i].contact);
         ASSERT_EQ(a[i].G, b[i].G);
         ASSERT_EQ(a[i].has_displacement, b[i].has_displacement);
-        if (opt.estimator == CentroidEstimator::kGaussian) {
+        if (opt.estimator == CentroidEstimator::kGaussian ||
+            opt.estimator == CentroidEstimator::kGaussianAxes) {
           ASSERT_NEAR(a[i].x_px, b[i].x_px, 1e-3);
           ASSERT_NEAR(a[i].y_px, b[i].y_px, 1e-3);
         } else {
@@ -317,8 +318,9 @@ TEST(StressLimits, LargestDiskAtFullScale16Bit) {
   e.zero_px = e.center_px;
   cal.elements.push_back(e);
   const std::int64_t n = disk_pixel_count(e.center_px, e.radius_px);
-  for (CentroidEstimator est : {CentroidEstimator::kThresholded, CentroidEstimator::kGaussian,
-                                CentroidEstimator::kPlain, CentroidEstimator::kWindowed}) {
+  for (CentroidEstimator est :
+       {CentroidEstimator::kThresholded, CentroidEstimator::kGaussian, CentroidEstimator::kPlain,
+        CentroidEstimator::kWindowed, CentroidEstimator::kGaussianAxes}) {
     ExtractorOptions opt;
     opt.reference_frames = 1;
     opt.estimator = est;

@@ -40,9 +40,13 @@ enum class CentroidEstimator : std::uint8_t {
   // (docs/calibration.md, docs/benchmarks.md). The default: the most accurate estimator for
   // its cost on the benchmark's Pareto front.
   kGaussian,
+  // kGaussian with the weight's width found per axis (from each axis's weighted second moment
+  // after the first pass), so that an elliptical spot (one wider along an image axis) gets its
+  // own matched weight (docs/calibration.md, docs/benchmarks.md).
+  kGaussianAxes,
 };
 
-// Parses "plain", "thresholded", "windowed" or "gaussian"; nullopt otherwise.
+// Parses "plain", "thresholded", "windowed", "gaussian" or "gaussian-axes"; nullopt otherwise.
 std::optional<CentroidEstimator> parse_estimator(std::string_view name);
 
 const char* to_string(CentroidEstimator e);
@@ -59,9 +63,9 @@ struct ExtractorOptions {
   std::uint32_t max_gap_frames = 4;
   // kWindowed: the window's half-width is the radius of the above-floor area plus this margin.
   double window_margin_px = 2.0;
-  // kGaussian: the weight reaches this many weight-sigmas from the first estimate. 3 is as
-  // accurate as 3.5 (the cut-off weight is 1 %, the bias it leaves below 0.0005 px) and faster;
-  // 2.5 leaves a bias of about 0.003 px (docs/benchmarks.md).
+  // kGaussian, kGaussianAxes: the weight reaches this many weight-sigmas from the first estimate. 3
+  // is as accurate as 3.5 (the cut-off weight is 1 %, the bias it leaves below 0.0005 px) and
+  // faster; 2.5 leaves a bias of about 0.003 px (docs/benchmarks.md).
   double gaussian_reach_sigmas = 3.0;
   // Accept frames that cover only part of the sensor (a camera region of interest, see
   // region_of_interest() and ImageView::origin_x/origin_y) as long as they hold every disk.
@@ -165,11 +169,11 @@ class Extractor {
   bool windowed_pass(std::size_t element, const ImageView& f, double& x, double& y,
                      double half_width) const noexcept;
   template <typename Pixel>
-  bool gaussian_pass(std::size_t element, const ImageView& f, double& x, double& y,
-                     double& sigma) noexcept;
+  bool gaussian_pass(std::size_t element, const ImageView& f, double& x, double& y, Vec2& sigma,
+                     bool per_axis) noexcept;
   template <typename Pixel>
   void gaussian_refine(std::size_t element, const ImageView& f, const detail::Moments& m, double g,
-                       Vec2& p) noexcept;
+                       bool per_axis, Vec2& p) noexcept;
   template <typename Pixel>
   Vec2 centroid(std::size_t element, const ImageView& f, const detail::Moments& m,
                 double g) noexcept;
