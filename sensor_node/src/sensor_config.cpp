@@ -54,7 +54,7 @@ SensorConfig load_sensor_config(const std::filesystem::path& path,
         {"estimator", "reference_frames", "reference_spot_check", "max_gap_frames"});
     if (auto e = m->find("estimator")) {
       const auto est = parse_estimator(e->as_string());
-      if (!est) e->fail("must be plain, thresholded, windowed or gaussian, is " + e->text());
+      if (!est) e->fail(std::string("must be ") + kEstimatorNames + ", is " + e->text());
       cfg.measurement.estimator = *est;
     }
     cfg.measurement.reference_frames = m->get("reference_frames", cfg.measurement.reference_frames);

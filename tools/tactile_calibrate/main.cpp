@@ -71,8 +71,8 @@ std::vector<tactile::Image> read_frames(const std::vector<std::string>& paths, c
 tactile::CentroidEstimator estimator_of(const std::string& name) {
   const auto e = tactile::parse_estimator(name);
   if (!e) {
-    throw UsageError("--estimator must be plain, thresholded, windowed or gaussian, is '" + name +
-                     "'");
+    throw UsageError(std::string("--estimator must be ") + tactile::kEstimatorNames + ", is '" +
+                     name + "'");
   }
   return *e;
 }

@@ -97,8 +97,8 @@ int run(const Options& opt) {
   tactile::ExtractorOptions xo;
   const auto estimator = tactile::parse_estimator(opt.estimator);
   if (!estimator) {
-    throw std::invalid_argument(
-        "--estimator must be plain, thresholded, windowed or gaussian, is '" + opt.estimator + "'");
+    throw std::invalid_argument(std::string("--estimator must be ") + tactile::kEstimatorNames +
+                                ", is '" + opt.estimator + "'");
   }
   xo.estimator = *estimator;
   xo.reference_frames = static_cast<int>(opt.references.size());
@@ -181,7 +181,7 @@ int main(int argc, char** argv) {
       ->allow_extra_args(false);  // one file per --reference; the rest are frames
   app.add_option("--fps", opt.fps, "frame rate the frames were taken at")->capture_default_str();
   app.add_option("--estimator", opt.estimator,
-                 "centroid estimator: plain, thresholded, windowed or gaussian")
+                 std::string("centroid estimator: ") + tactile::kEstimatorNames)
       ->capture_default_str();
   app.add_option("--format", opt.format,
                  "json: one JSON object per frame (docs/calibration.md, tactile_extract); table: a "

@@ -114,9 +114,8 @@ int remeasure(const Options& opt) {
   if (!opt.estimator.empty()) {
     ro.estimator = tactile::parse_estimator(opt.estimator);
     if (!ro.estimator) {
-      throw std::invalid_argument(
-          "--estimator must be plain, thresholded, windowed or gaussian, is '" + opt.estimator +
-          "'");
+      throw std::invalid_argument(std::string("--estimator must be ") + tactile::kEstimatorNames +
+                                  ", is '" + opt.estimator + "'");
     }
   }
   tactile::replay::Remeasurer rm(std::move(cals), ro);

@@ -48,6 +48,9 @@ enum class CentroidEstimator : std::uint8_t {
 
 // Parses "plain", "thresholded", "windowed", "gaussian" or "gaussian-axes"; nullopt otherwise.
 std::optional<CentroidEstimator> parse_estimator(std::string_view name);
+// The names parse_estimator accepts, for error messages and --help.
+inline constexpr const char* kEstimatorNames =
+    "plain, thresholded, windowed, gaussian or gaussian-axes";
 
 const char* to_string(CentroidEstimator e);
 
