@@ -32,9 +32,10 @@ Case case_of(std::uint64_t sweep_seed, std::uint64_t index) {
   return at == displaced ? Case::kBottleDisplaced : at == held ? Case::kCapHeld : Case::kNormal;
 }
 
-// Rounded to a grid of `step`: the scenario file states it exactly.
-double rounded(double v, double step) {
-  return std::round(v / step) * step;
+// Rounded to a grid of 1 / `per_unit` (a whole number of steps over an exact power of ten, so the
+// file's shortest text is the grid's: 1.3879, not 1.3879000000000001).
+double rounded(double v, double per_unit) {
+  return std::round(v * per_unit) / per_unit;
 }
 
 // The disturbance and the fragility of scenario `index` (Draw's last values), from a generator of
@@ -64,23 +65,23 @@ void draw_disturbance(std::uint64_t sweep_seed, std::uint64_t index, Draw& d) {
     d.disturbance = kind;
     d.after_s = after;
     // + 0.0: no negative zero in the file.
-    d.direction = {rounded(std::cos(elevation) * std::cos(azimuth), 1e-4) + 0.0,
-                   rounded(std::cos(elevation) * std::sin(azimuth), 1e-4) + 0.0,
-                   rounded(std::sin(elevation), 1e-4) + 0.0};
+    d.direction = {rounded(std::cos(elevation) * std::cos(azimuth), 1e4) + 0.0,
+                   rounded(std::cos(elevation) * std::sin(azimuth), 1e4) + 0.0,
+                   rounded(std::sin(elevation), 1e4) + 0.0};
     const double weight_n = d.mass_kg * 9.81;
     switch (kind) {
       case Disturbance::kPullRamp:
         d.pull_ramp_s = ramp;
         [[fallthrough]];
       case Disturbance::kPullStep:
-        d.pull_n = rounded(weights * weight_n, 1e-6);
+        d.pull_n = rounded(weights * weight_n, 1e6);
         d.pull_duration_s = duration;
         break;
       case Disturbance::kMassStep:
-        d.added_kg = rounded(masses * d.mass_kg, 1e-5);
+        d.added_kg = rounded(masses * d.mass_kg, 1e5);
         break;
       case Disturbance::kKnock:
-        d.impulse_ns = rounded(speed * d.mass_kg, 1e-7);
+        d.impulse_ns = rounded(speed * d.mass_kg, 1e7);
         break;
       case Disturbance::kNone:
         break;
@@ -89,7 +90,7 @@ void draw_disturbance(std::uint64_t sweep_seed, std::uint64_t index, Draw& d) {
   if (fragile) {
     // The least holding force of this very scenario, disturbance included: its file's world.
     const Scenario sc = parse_scenario(scenario_yaml(d), "the sweep's draw");
-    d.crush_force_n = std::max(1e-3, rounded(crush * hold_need(sc.world, 2.5).grip_needed_n, 1e-4));
+    d.crush_force_n = std::max(1e-3, rounded(crush * hold_need(sc.world, 2.5).grip_needed_n, 1e4));
   }
 }
 
