@@ -40,6 +40,50 @@ nlohmann::ordered_json grip_json(const GripMetrics& g) {
           {"steady_need_max_N", held(g.steady_need_max_N)}};
 }
 
+nlohmann::ordered_json vec_json(Vec3 v) {
+  return nlohmann::ordered_json::array({v.x, v.y, v.z});
+}
+
+// A start on the run's clock; null while its stage never came.
+nlohmann::ordered_json start_json(double start_s) {
+  return std::isfinite(start_s) ? nlohmann::ordered_json(start_s) : nullptr;
+}
+
+// The report's `disturbance`: each disturbance the scenario set, as applied.
+nlohmann::ordered_json disturbance_json(const DisturbanceParams& d) {
+  using nlohmann::ordered_json;
+  ordered_json out = ordered_json::object();
+  if (d.pull.force_n > 0) {
+    out["pull"] = {{"force_N", d.pull.force_n},
+                   {"direction", vec_json(d.pull.direction)},
+                   {"start_s", start_json(d.pull.start_s)},
+                   {"ramp_s", d.pull.ramp_s},
+                   {"duration_s", std::isfinite(d.pull.duration_s) ? ordered_json(d.pull.duration_s)
+                                                                   : ordered_json(nullptr)}};
+  }
+  if (d.mass_step.added_kg > 0) {
+    out["mass_step"] = {{"added_kg", d.mass_step.added_kg},
+                        {"start_s", start_json(d.mass_step.start_s)}};
+  }
+  if (d.knock.impulse_ns > 0) {
+    out["knock"] = {{"impulse_Ns", d.knock.impulse_ns},
+                    {"direction", vec_json(d.knock.direction)},
+                    {"start_s", start_json(d.knock.start_s)},
+                    {"duration_s", d.knock.duration_s}};
+  }
+  return out;
+}
+
+// The report's `fragile`.
+nlohmann::ordered_json fragile_json(const CrushTruth& c) {
+  using nlohmann::ordered_json;
+  return {{"crush_force_N", c.crush_force_n},
+          {"broken", c.broken},
+          {"broken_at_s", c.broken ? ordered_json(c.broken_at_s) : ordered_json(nullptr)},
+          {"peak_grip_N", c.peak_grip_n},
+          {"peak_over_crush", c.peak_grip_n / c.crush_force_n}};
+}
+
 }  // namespace
 
 void SlipScorer::add(std::size_t i, std::size_t k, std::uint64_t frame, bool predicted, bool ideal,
@@ -303,6 +347,9 @@ std::string report_json(const Report& r) {
       by_stage[control::to_string(static_cast<control::Phase>(p))] = r.recompressions_by_phase[p];
   }
   report["recompressions_by_stage"] = std::move(by_stage);
+  // Only for a scenario with them: every other report keeps its bytes.
+  if (r.disturbance) report["disturbance"] = disturbance_json(*r.disturbance);
+  if (r.fragile) report["fragile"] = fragile_json(*r.fragile);
   ordered_json machine = nullptr;
   if (r.machine) {
     machine = {{"cpu_steal_pct", r.machine->steal_pct},

@@ -22,10 +22,11 @@ const char* scenario_case(const WorldParams& w) {
 }
 
 void judge_negative_case(Report& r) {
+  const bool crushed = r.fragile && r.fragile->broken;
   if (r.scenario_case == "bottle_displaced") {
-    r.negative_case_passed = !r.release_classified && !r.opened_in_air;
+    r.negative_case_passed = !r.release_classified && !r.opened_in_air && !crushed;
   } else if (r.scenario_case == "cap_held") {
-    r.negative_case_passed = r.grasp_classified != "grasp";
+    r.negative_case_passed = r.grasp_classified != "grasp" && !crushed;
   } else {
     r.negative_case_passed.reset();
   }
@@ -63,6 +64,22 @@ ScenarioRun::ScenarioRun(const Scenario& sc, const CameraParams& camera, Lockste
   rep.hold = hold_need(sc.world, cfg_.f2_n);
   rep.end_reason = "max_time";
   scorer_.reserve(max_frames_ + 1);
+  scorer_.score_crush(sc.world.cap.crush_force_n);
+}
+
+bool has_disturbance(const DisturbanceParams& d) {
+  return d.pull.force_n > 0 || d.mass_step.added_kg > 0 || d.knock.impulse_ns > 0;
+}
+
+void ScenarioRun::start_staged_disturbances(control::Phase phase) {
+  const char* stage = control::to_string(phase);
+  for (std::size_t k = 0; k < sc_.disturbance_start.size(); ++k) {
+    const DisturbanceStart& start = sc_.disturbance_start[k];
+    if (!start.stage.empty() && start.stage == stage) {
+      // The world keeps the first start of each kind: the stage's first frame.
+      world_.start_disturbance(static_cast<DisturbanceKind>(k), world_.time() + start.after_s);
+    }
+  }
 }
 
 bool ScenarioRun::step(int steps, double dt_s) {
@@ -91,6 +108,7 @@ void ScenarioRun::score_truth(std::uint64_t frame, double t_s, const GroundTruth
                               const ControllerState& controller) {
   scorer_.add_truth(frame, t_s, truth, controller, frame_pose(world_, transport_));
   scorer_.add_grip(t_s, grip_truth(world_, truth));
+  start_staged_disturbances(controller.phase);
 }
 
 control::ArmMotion ScenarioRun::arm_motion(double t_s) {
@@ -122,6 +140,8 @@ bool ScenarioRun::ended_after_frame(std::uint64_t frames, double t_s) {
 
 void ScenarioRun::finish(double sim_time_s, std::uint64_t frames) {
   scorer_.finish(world_.cap().dropped, sim_time_s, frames);
+  if (has_disturbance(world_.params().disturbance))
+    result_.report.disturbance = world_.params().disturbance;
   judge_negative_case(result_.report);
 }
 

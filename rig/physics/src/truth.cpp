@@ -33,8 +33,18 @@ GripTruth grip_truth(const World& world, const GroundTruth& truth) {
   const double thread_nm = cap.place == CapPlace::kThreaded
                                ? p.bottle.free_torque_nm + std::abs(cap.thread_torque_nm)
                                : 0.0;
-  g.needed_n = grip_needed_n(p, world.wrist_accel_actual(), axis, thread_nm);
+  g.needed_n = grip_needed_n(p, world.wrist_accel_actual(), axis, thread_nm, world.cap_mass_kg(),
+                             world.external_force_n());
   return g;
+}
+
+void CrushTruth::add(double t_s, const GripTruth& grip) noexcept {
+  const double applied = std::max(grip.applied_n[0], grip.applied_n[1]);
+  peak_grip_n = std::max(peak_grip_n, applied);
+  if (crush_force_n > 0 && !broken && applied > crush_force_n) {
+    broken = true;
+    broken_at_s = t_s;
+  }
 }
 
 const GroundTruth& TruthRecorder::take(World& world, std::uint64_t frame_id,

@@ -110,10 +110,56 @@ std::array<Vec3, kElementsPerFingertip> World::element_normals() const {
   return out;
 }
 
-double grip_needed_n(const WorldParams& p, Vec3 accel_mps2, Vec3 squeeze_axis, double torque_nm) {
-  // What the fingers must apply to the cap: m (a - g), g pointing down.
-  const double m = p.cap.mass_kg;
-  const Vec3 load{m * accel_mps2.x, m * accel_mps2.y, m * (accel_mps2.z + p.gravity_mps2)};
+namespace {
+
+// The integral over [0, u] of a profile that rises linearly from 0 to 1 over `ramp` and then
+// stays at 1 (ramp 0: a step).
+double ramp_integral(double u, double ramp) {
+  if (u <= 0) return 0;
+  if (ramp <= 0) return u;
+  return u < ramp ? 0.5 * u * u / ramp : u - 0.5 * ramp;
+}
+
+// The profile's integral over [t0, t1] within its pulse [start, start + duration].
+double pulse_integral(double start, double duration, double ramp, double t0, double t1) {
+  if (!std::isfinite(start)) return 0;  // its stage has not begun
+  const double a = std::max(t0, start);
+  const double b = std::min(t1, start + duration);
+  if (!(b > a)) return 0;
+  return ramp_integral(b - start, ramp) - ramp_integral(a - start, ramp);
+}
+
+}  // namespace
+
+Vec3 external_impulse_ns(const DisturbanceParams& d, double t0_s, double t1_s) {
+  Vec3 j{};
+  const PullParams& pull = d.pull;
+  if (pull.force_n > 0) {
+    j = j +
+        (pull.force_n * pulse_integral(pull.start_s, pull.duration_s, pull.ramp_s, t0_s, t1_s)) *
+            pull.direction;
+  }
+  const KnockParams& knock = d.knock;
+  if (knock.impulse_ns > 0 && knock.duration_s > 0) {
+    const double force = knock.impulse_ns / knock.duration_s;
+    j = j +
+        (force * pulse_integral(knock.start_s, knock.duration_s, 0, t0_s, t1_s)) * knock.direction;
+  }
+  return j;
+}
+
+double cap_mass_kg(const WorldParams& p, double t_s) {
+  const MassStepParams& step = p.disturbance.mass_step;
+  return step.added_kg > 0 && t_s >= step.start_s ? p.cap.mass_kg + step.added_kg : p.cap.mass_kg;
+}
+
+double grip_needed_n(const WorldParams& p, Vec3 accel_mps2, Vec3 squeeze_axis, double torque_nm,
+                     double mass_kg, Vec3 external_force_n) {
+  // What the fingers must apply to the cap: m (a - g) - F_ext, g pointing down.
+  const double m = mass_kg;
+  const Vec3 f = external_force_n;
+  const Vec3 load{m * accel_mps2.x - f.x, m * accel_mps2.y - f.y,
+                  m * (accel_mps2.z + p.gravity_mps2) - f.z};
   // Across the squeeze, horizontally: the direction the twist's couple acts in too.
   const Vec3 across = cross(Vec3{0, 0, 1}, squeeze_axis);
   const double vertical = 0.5 * load.z;
@@ -123,12 +169,35 @@ double grip_needed_n(const WorldParams& p, Vec3 accel_mps2, Vec3 squeeze_axis, d
   return std::hypot(vertical, horizontal + couple) / p.cap.friction;
 }
 
+namespace {
+
+// hold_need's grip at the peak acceleration along gravity: with the cap's own mass and no
+// disturbance, grip_needed_n's; with disturbances, the largest of them (the mass after a mass
+// step; the pull's or the knock's force, its vertical part adding to the load and its horizontal
+// part across the squeeze, where the wrist may turn it).
+double disturbed_grip_needed_n(const WorldParams& p, double peak_accel_mps2) {
+  const DisturbanceParams& d = p.disturbance;
+  const Vec3 accel{0, 0, peak_accel_mps2};
+  const double m = p.cap.mass_kg + std::max(0.0, d.mass_step.added_kg);
+  double need = grip_needed_n(p, accel, {1, 0, 0}, 0.0, m, {});
+  const auto worst = [&](Vec3 force) {
+    const Vec3 across{0, std::hypot(force.x, force.y), -std::abs(force.z)};
+    need = std::max(need, grip_needed_n(p, accel, {1, 0, 0}, 0.0, m, across));
+  };
+  if (d.pull.force_n > 0) worst(d.pull.force_n * d.pull.direction);
+  if (d.knock.impulse_ns > 0 && d.knock.duration_s > 0)
+    worst((d.knock.impulse_ns / d.knock.duration_s) * d.knock.direction);
+  return need;
+}
+
+}  // namespace
+
 HoldNeed hold_need(const WorldParams& p, double f2_n) {
   HoldNeed h;
   const ArmParams& arm = p.arm;
   const double w = 2.0 * kPi * arm.vibration_hz;
   h.peak_accel_mps2 = arm.max_accel_mps2 + w * w * arm.vibration_m;
-  h.grip_needed_n = grip_needed_n(p, {0, 0, h.peak_accel_mps2}, {1, 0, 0}, 0.0);
+  h.grip_needed_n = disturbed_grip_needed_n(p, h.peak_accel_mps2);
   // The apex pressed in by F2 / k_n; each element's depth as contact_forces() takes it, with the
   // patch centred on the cap's height: along the squeeze its tip lies r_d (1 - cos theta) behind
   // the apex, across it r_d sin(theta) cos(phi), upward r_d sin(theta) sin(phi).
@@ -194,6 +263,23 @@ bool World::apply(const ArmCommand& c) noexcept {
       break;
   }
   return true;
+}
+
+double World::cap_mass_kg() const noexcept {
+  return rig::cap_mass_kg(p_, t_);
+}
+
+void World::start_disturbance(DisturbanceKind kind, double t_s) noexcept {
+  DisturbanceParams& d = p_.disturbance;
+  double& start = kind == DisturbanceKind::kPull       ? d.pull.start_s
+                  : kind == DisturbanceKind::kMassStep ? d.mass_step.start_s
+                                                       : d.knock.start_s;
+  if (!std::isfinite(start) && std::isfinite(t_s)) start = t_s;
+}
+
+void World::add_external_force(Vec3& force, double dt) noexcept {
+  external_force_n_ = (1.0 / dt) * external_impulse_ns(p_.disturbance, t_, t_ + dt);
+  force = force + external_force_n_;
 }
 
 Vec3 World::wrist_accel_actual() const noexcept {
@@ -520,7 +606,7 @@ World::Supports World::support_forces(Vec3& force, double inertia) const noexcep
 // form: a viscous law stiff enough to hold, capped at the Coulomb value.
 void World::integrate_cap(Vec3 force, double torque, const Supports& s, double inertia,
                           double dt) noexcept {
-  const double m = p_.cap.mass_kg;
+  const double m = cap_mass_kg();
   const double eps = p_.slip_speed_eps_mps;
   Vec3 v = cap_.velocity_mps + (dt / m) * force;
   if (s.table_n > 0) {
@@ -584,10 +670,11 @@ bool World::step(double dt) noexcept {
   place_fingertips();
 
   const BaseMotion base = base_motion(dt);
-  Vec3 force{0, 0, -p_.cap.mass_kg * p_.gravity_mps2};
+  const double m = cap_mass_kg();
+  Vec3 force{0, 0, -m * p_.gravity_mps2};
+  add_external_force(force, dt);
   double torque = 0;
   contact_forces(base, force, torque, dt);
-  const double m = p_.cap.mass_kg;
   const double inertia = p_.cap.inertia_factor * m * p_.cap.radius_m * p_.cap.radius_m;
   const Supports supports = support_forces(force, inertia);
   torque += supports.thread_torque;

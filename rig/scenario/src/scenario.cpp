@@ -9,7 +9,9 @@
 #include "tactile/config/controller_file.hpp"
 #include "tactile/config/yaml.hpp"
 #include "tactile/control/config.hpp"
+#include "tactile/control/types.hpp"
 #include "tactile/util/files.hpp"
+#include "tactile/util/text.hpp"
 
 namespace tactile::rig {
 namespace {
@@ -93,7 +95,8 @@ void parse_camera(const Node& cam, CameraParams& c) {
 // Required: mass_kg, radius_mm, friction.
 void parse_cap(const Node& cap, CapParams& cp) {
   cap.refuse_unknown_keys({"mass_kg", "radius_mm", "friction", "height_mm", "kinetic_ratio",
-                           "inertia_factor", "x_m", "y_m", "table_friction", "held_to_table"});
+                           "inertia_factor", "x_m", "y_m", "table_friction", "held_to_table",
+                           "crush_force_n"});
   cp.mass_kg = need(cap, "mass_kg", 1e-4, 1.0);
   cp.radius_m = need(cap, "radius_mm", 5.0, 50.0) / 1000.0;
   cp.friction = need(cap, "friction", 0.05, 3.0);
@@ -104,6 +107,7 @@ void parse_cap(const Node& cap, CapParams& cp) {
   cp.y_m = want(cap, "y_m", cp.y_m, -2.0, 2.0);
   cp.table_friction = want(cap, "table_friction", cp.table_friction, 0.0, 3.0);
   cp.held_to_table = cap.get("held_to_table", cp.held_to_table);
+  cp.crush_force_n = want(cap, "crush_force_n", cp.crush_force_n, 1e-3, 1000.0);
 }
 
 // Required: free_turn_deg.
@@ -200,6 +204,77 @@ void parse_sim(const Node& sim, Scenario& s) {
   s.partial_slip_ratio = want(sim, "partial_slip_ratio", s.partial_slip_ratio, 0.05, 1.0);
 }
 
+// A direction in the world frame: three numbers, not all zero; made a unit vector.
+Vec3 parse_direction(const Node& n) {
+  const std::vector<double> v = n.as_doubles();
+  if (v.size() != 3) n.fail("must be [x, y, z] in the world frame, is " + n.text());
+  const Vec3 d{v[0], v[1], v[2]};
+  const double length = norm(d);
+  if (!(length > 0)) n.fail("must not be [0, 0, 0]");
+  return (1.0 / length) * d;
+}
+
+// The controller's stage names (control::to_string(Phase)) a disturbance can be timed from.
+std::vector<std::string> stage_names() {
+  std::vector<std::string> names;
+  for (int p = 0; p <= static_cast<int>(control::Phase::kAborted); ++p)
+    names.emplace_back(control::to_string(static_cast<control::Phase>(p)));
+  return names;
+}
+
+// start_s, into `stage` when one is named, else on the run's clock: into `start` (absolute) or
+// `by_stage`.
+void parse_start(const Node& sec, double& start, DisturbanceStart& by_stage) {
+  const double at = need(sec, "start_s", 0.0, 3600.0);
+  const auto stage = sec.find("stage");
+  if (!stage) {
+    start = at;
+    return;
+  }
+  const std::vector<std::string> names = stage_names();
+  const std::string name = stage->as_string();
+  if (std::find(names.begin(), names.end(), name) == names.end()) {
+    std::string known;
+    for (const std::string& n : names)
+      known += (known.empty() ? "" : ", ") + n;
+    const std::string close = util::closest_match(name, names);
+    stage->fail("must be one of the controller's stages (" + known + "), is " + stage->text() +
+                (close.empty() ? "" : " (did you mean '" + close + "'?)"));
+  }
+  by_stage = {name, at};
+}
+
+// Each disturbance is optional; absent, the world has none.
+void parse_disturbance(const Node& dist, Scenario& s) {
+  if (!dist.is_map()) dist.fail("must be a mapping of pull, mass_step, knock");
+  dist.refuse_unknown_keys({"pull", "mass_step", "knock"});
+  DisturbanceParams& d = s.world.disturbance;
+  auto& by_stage = s.disturbance_start;
+  if (auto pull = dist.find("pull")) {
+    pull->refuse_unknown_keys({"force_n", "direction", "stage", "start_s", "ramp_s", "duration_s"});
+    d.pull.force_n = need(*pull, "force_n", 1e-4, 100.0);
+    if (auto dir = pull->find("direction")) d.pull.direction = parse_direction(*dir);
+    parse_start(*pull, d.pull.start_s, by_stage[static_cast<std::size_t>(DisturbanceKind::kPull)]);
+    d.pull.ramp_s = want(*pull, "ramp_s", 0.0, 0.0, 60.0);
+    if (auto duration = pull->find("duration_s"))
+      d.pull.duration_s = checked(*duration, 1e-3, 3600.0);
+  }
+  if (auto step = dist.find("mass_step")) {
+    step->refuse_unknown_keys({"added_kg", "stage", "start_s"});
+    d.mass_step.added_kg = need(*step, "added_kg", 1e-5, 1.0);
+    parse_start(*step, d.mass_step.start_s,
+                by_stage[static_cast<std::size_t>(DisturbanceKind::kMassStep)]);
+  }
+  if (auto knock = dist.find("knock")) {
+    knock->refuse_unknown_keys({"impulse_ns", "direction", "stage", "start_s", "duration_s"});
+    d.knock.impulse_ns = need(*knock, "impulse_ns", 1e-6, 10.0);
+    if (auto dir = knock->find("direction")) d.knock.direction = parse_direction(*dir);
+    parse_start(*knock, d.knock.start_s,
+                by_stage[static_cast<std::size_t>(DisturbanceKind::kKnock)]);
+    d.knock.duration_s = want(*knock, "duration_s", d.knock.duration_s, 1e-4, 0.1);
+  }
+}
+
 // Overrides of the controller's settings, by the names of controller_keys().
 void parse_controller(const Node& ctl, Scenario& s) {
   if (!ctl.is_map()) ctl.fail("must be a mapping of controller settings");
@@ -222,7 +297,7 @@ Scenario parse_scenario(const std::string& text, const std::string& source) {
   const Node root = config::parse_yaml(text, source);
   if (!root.is_map()) root.fail("a scenario must be a mapping");
   root.refuse_unknown_keys({"format", "seed", "camera", "cap", "bottle", "arm", "fingertip",
-                            "sensor", "sim", "controller"});
+                            "sensor", "sim", "controller", "disturbance"});
   Scenario s;
   s.source = source;
   const Node format = root["format"];
@@ -245,6 +320,7 @@ Scenario parse_scenario(const std::string& text, const std::string& source) {
     root["sim"]["dt_s"].fail("must not exceed the camera's frame period");
   }
   if (auto ctl = root.find("controller")) parse_controller(*ctl, s);
+  if (auto dist = root.find("disturbance")) parse_disturbance(*dist, s);
 
   // The fingertip's tangential law is the sensor's calibrated shear curve (see docs/rig.md).
   s.world.fingertip.shear_curve = PiecewiseLinear({0.0, 0.02, 0.08}, {0.0, 0.05, 0.4});

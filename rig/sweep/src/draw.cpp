@@ -1,10 +1,13 @@
 // The sweep's draw: pure, no I/O (docs/slip.md, "The sweep").
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
+#include "tactile/rig/scenario.hpp"
 #include "tactile/rig/sweep.hpp"
+#include "tactile/rig/world.hpp"
 #include "tactile/util/random.hpp"
 
 namespace tactile::rig::sweep {
@@ -29,7 +32,111 @@ Case case_of(std::uint64_t sweep_seed, std::uint64_t index) {
   return at == displaced ? Case::kBottleDisplaced : at == held ? Case::kCapHeld : Case::kNormal;
 }
 
+// Rounded to a grid of 1 / `per_unit` (a whole number of steps over an exact power of ten, so the
+// file's shortest text is the grid's: 1.3879, not 1.3879000000000001).
+double rounded(double v, double per_unit) {
+  return std::round(v * per_unit) / per_unit;
+}
+
+// The disturbance and the fragility of scenario `index` (Draw's last values), from a generator of
+// their own: the draw's main generator, and so every other value, is untouched by them.
+void draw_disturbance(std::uint64_t sweep_seed, std::uint64_t index, Draw& d) {
+  constexpr std::uint64_t kSalt = 0x6469737475726221ULL;  // "disturb!"
+  util::Random rng(util::splitmix64(util::splitmix64(sweep_seed ^ kSalt) ^ index));
+  // Every number is drawn whatever the outcome, in a fixed order.
+  const bool disturbed = rng.uniform() < kDisturbedShare;
+  const auto kind = static_cast<Disturbance>(1 + rng.below(4));
+  const double weights = on_grid(rng, {kPullWeights.lo * 100, kPullWeights.hi * 100}, 1.0) / 100;
+  const double masses =
+      on_grid(rng, {kMassStepMasses.lo * 100, kMassStepMasses.hi * 100}, 1.0) / 100;
+  const double speed =
+      on_grid(rng, {kKnockSpeedMps.lo * 1000, kKnockSpeedMps.hi * 1000}, 1.0) / 1000;
+  const double duration =
+      on_grid(rng, {kPullDurationS.lo * 100, kPullDurationS.hi * 100}, 1.0) / 100;
+  const double ramp = on_grid(rng, {kPullRampS.lo * 100, kPullRampS.hi * 100}, 1.0) / 100;
+  const double after =
+      on_grid(rng, {kDisturbanceAfterS.lo * 100, kDisturbanceAfterS.hi * 100}, 1.0) / 100;
+  const double azimuth = static_cast<double>(rng.below(8)) * std::numbers::pi / 4.0;
+  const double elevation = -static_cast<double>(rng.below(3)) * std::numbers::pi / 4.0;
+  const bool fragile = rng.uniform() < kFragileShare;
+  const double crush = on_grid(rng, {kCrushOverNeed.lo * 100, kCrushOverNeed.hi * 100}, 1.0) / 100;
+
+  if (disturbed) {
+    d.disturbance = kind;
+    d.after_s = after;
+    // + 0.0: no negative zero in the file.
+    d.direction = {rounded(std::cos(elevation) * std::cos(azimuth), 1e4) + 0.0,
+                   rounded(std::cos(elevation) * std::sin(azimuth), 1e4) + 0.0,
+                   rounded(std::sin(elevation), 1e4) + 0.0};
+    const double weight_n = d.mass_kg * 9.81;
+    switch (kind) {
+      case Disturbance::kPullRamp:
+        d.pull_ramp_s = ramp;
+        [[fallthrough]];
+      case Disturbance::kPullStep:
+        d.pull_n = rounded(weights * weight_n, 1e6);
+        d.pull_duration_s = duration;
+        break;
+      case Disturbance::kMassStep:
+        d.added_kg = rounded(masses * d.mass_kg, 1e5);
+        break;
+      case Disturbance::kKnock:
+        d.impulse_ns = rounded(speed * d.mass_kg, 1e7);
+        break;
+      case Disturbance::kNone:
+        break;
+    }
+  }
+  if (fragile) {
+    // The least holding force of this very scenario, disturbance included: its file's world.
+    const Scenario sc = parse_scenario(scenario_yaml(d), "the sweep's draw");
+    d.crush_force_n = std::max(1e-3, rounded(crush * hold_need(sc.world, 2.5).grip_needed_n, 1e4));
+  }
+}
+
+// The disturbance's section of the scenario file.
+std::string disturbance_yaml(const Draw& d) {
+  const std::string direction =
+      fmt::format("[{}, {}, {}]", d.direction[0], d.direction[1], d.direction[2]);
+  const std::string start = fmt::format("stage: {}, start_s: {}", kDisturbanceStage, d.after_s);
+  switch (d.disturbance) {
+    case Disturbance::kPullStep:
+      return fmt::format(
+          "disturbance: {{pull: {{force_n: {}, direction: {}, {}, duration_s: {}}}}}\n", d.pull_n,
+          direction, start, d.pull_duration_s);
+    case Disturbance::kPullRamp:
+      return fmt::format(
+          "disturbance: {{pull: {{force_n: {}, direction: {}, {}, ramp_s: {}, duration_s: {}}}}}\n",
+          d.pull_n, direction, start, d.pull_ramp_s, d.pull_duration_s);
+    case Disturbance::kMassStep:
+      return fmt::format("disturbance: {{mass_step: {{added_kg: {}, {}}}}}\n", d.added_kg, start);
+    case Disturbance::kKnock:
+      return fmt::format(
+          "disturbance: {{knock: {{impulse_ns: {}, direction: {}, {}, duration_s: {}}}}}\n",
+          d.impulse_ns, direction, start, kKnockDurationS);
+    case Disturbance::kNone:
+      break;
+  }
+  return {};
+}
+
 }  // namespace
+
+const char* to_string(Disturbance d) {
+  switch (d) {
+    case Disturbance::kNone:
+      return "none";
+    case Disturbance::kPullStep:
+      return "pull_step";
+    case Disturbance::kPullRamp:
+      return "pull_ramp";
+    case Disturbance::kMassStep:
+      return "mass_step";
+    case Disturbance::kKnock:
+      return "knock";
+  }
+  return "?";
+}
 
 const char* to_string(Case c) {
   switch (c) {
@@ -69,6 +176,7 @@ Draw draw_scenario(std::uint64_t sweep_seed, std::uint64_t index) {
   // On a 0.1 mm grid, so that the file states it exactly.
   d.displaced_x_mm = std::round(distance * std::cos(direction) * 10.0) / 10.0 + 0.0;
   d.displaced_y_mm = std::round(distance * std::sin(direction) * 10.0) / 10.0 + 0.0;
+  draw_disturbance(sweep_seed, index, d);
   return d;
 }
 
@@ -96,6 +204,16 @@ std::string scenario_yaml(const Draw& d, double max_sim_time_s) {
     y += fmt::format("controller: {{lower_limit_m: {}}}\n", kDisplacedLowerLimitM);
   }
   if (max_sim_time_s > 0) y += fmt::format("sim: {{max_time_s: {}}}\n", max_sim_time_s);
+  // The disturbance and the fragility last, so that a file without them is the draw's without.
+  if (d.disturbance != Disturbance::kNone) {
+    y += fmt::format("# Disturbance ({}): timed from the carry (docs/slip.md).\n",
+                     to_string(d.disturbance));
+    y += disturbance_yaml(d);
+  }
+  if (d.crush_force_n > 0) {
+    y += "# Fragile: the cap breaks under a grip above crush_force_n per fingertip.\n";
+    y.replace(y.find("kinetic_ratio: "), 0, fmt::format("crush_force_n: {}, ", d.crush_force_n));
+  }
   return y;
 }
 

@@ -43,6 +43,8 @@ Row drawn_row(const Draw& d, const std::string& method) {
   set("noise_sigma", fmt::format("{}", d.noise_sigma));
   set("fps", fmt::format("{}", d.fps));
   set("bit_depth", fmt::format("{}", d.bit_depth));
+  set("disturbance", to_string(d.disturbance));
+  if (d.crush_force_n > 0) set("crush_force_N", fmt::format("{}", d.crush_force_n));
   return row;
 }
 
@@ -139,6 +141,31 @@ std::string hold_table(const std::vector<const Row*>& rows) {
   return out;
 }
 
+// The outcomes per disturbance drawn (docs/slip.md, "Disturbances and fragile objects"), and of
+// the fragile objects: how many the grip broke.
+std::string disturbance_table(const std::vector<const Row*>& rows) {
+  std::string out =
+      "\n| disturbance | scenarios | completed | dropped | OVER raised | fragile | broken "
+      "|\n|---|---|---|---|---|---|---|\n";
+  for (const Disturbance d : {Disturbance::kNone, Disturbance::kPullStep, Disturbance::kPullRamp,
+                              Disturbance::kMassStep, Disturbance::kKnock}) {
+    const std::string name = to_string(d);
+    std::size_t n = 0, completed = 0, dropped = 0, over = 0, fragile = 0, broken = 0;
+    for (const Row* r : rows) {
+      if (r->at("disturbance") != name) continue;
+      ++n;
+      completed += r->at("completed") == "true" ? 1 : 0;
+      dropped += r->at("dropped") == "true" ? 1 : 0;
+      over += r->number("over_events") > 0 ? 1 : 0;
+      fragile += r->at("crush_force_N").empty() ? 0 : 1;
+      broken += r->at("broken") == "true" ? 1 : 0;
+    }
+    out += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", name, n, completed, dropped, over,
+                       fragile, broken);
+  }
+  return out;
+}
+
 }  // namespace
 
 const std::vector<std::string>& columns() {
@@ -191,6 +218,10 @@ const std::vector<std::string>& columns() {
                                           "grip_ratio_p95",
                                           "grip_instant_ratio_p50",
                                           "cap_slide_carry_mm",
+                                          "disturbance",
+                                          "crush_force_N",
+                                          "broken",
+                                          "peak_grip_over_crush",
                                           "sim_time_s",
                                           "error"};
   return c;
@@ -270,6 +301,11 @@ std::vector<Row> rows_from_report(const Draw& d, const std::string& report_json)
     set("grip_ratio_p95", cell(need(grip, "ratio_p95")));
     set("grip_instant_ratio_p50", cell(need(grip, "instant_ratio_p50")));
     set("cap_slide_carry_mm", cell(need(grip, "cap_slide_carry_mm")));
+  }
+  // A fragile object's outcome; empty for one that is not.
+  if (r.contains("fragile")) {
+    set("broken", cell(need(r.at("fragile"), "broken")));
+    set("peak_grip_over_crush", cell(need(r.at("fragile"), "peak_over_crush")));
   }
   set("sim_time_s", cell(need(need(r, "lockstep"), "sim_time_s")));
   return {row};
@@ -424,8 +460,8 @@ std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info
       score_row(score);
     }
     // The grip against the least that holds (docs/rig.md, "The grip's truth").
-    for (const char* score :
-         {"grip_ratio_p50", "grip_ratio_p95", "grip_instant_ratio_p50", "cap_slide_carry_mm"}) {
+    for (const char* score : {"grip_ratio_p50", "grip_ratio_p95", "grip_instant_ratio_p50",
+                              "cap_slide_carry_mm", "peak_grip_over_crush"}) {
       score_row(score);
     }
     out += "\n| outcome | scenarios |\n|---|---|\n";
@@ -448,8 +484,11 @@ std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info
     out +=
         fmt::format("| tight in the true cycle | {} |\n",
                     share(count([](const Row* r) { return r->number("tight_cycle_error") == 0; })));
+    out += fmt::format("| fragile object broken | {} |\n",
+                       share(count([](const Row* r) { return r->at("broken") == "true"; })));
     out += case_table(mine);
     out += hold_table(mine);
+    out += disturbance_table(mine);
   }
   return out;
 }

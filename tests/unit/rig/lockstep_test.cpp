@@ -83,6 +83,58 @@ TEST(Lockstep, DefaultScenarioGripIsAboveTheLeastThatHolds) {
   EXPECT_EQ(by_stage, rep.recompressions);
 }
 
+// A pull on the cap during the carry and a fragile cap (docs/rig.md, "Disturbances and fragile
+// objects"): the pull starts 0.5 s into TRANSPORT and the truth's need carries it; the paper's grip
+// (several newtons per fingertip) crushes a cap that breaks at 2 N and fails the run, and leaves
+// one that breaks just above the grip's peak whole.
+TEST(Lockstep, APullDuringTheCarryAndAFragileCap) {
+  Scenario sc = load_scenario(kDir / "default.yaml");
+  sc.world.disturbance.pull = {0.2, {0, 0, -1}, kNotYet, 0.0, 1.0};
+  sc.disturbance_start[static_cast<std::size_t>(DisturbanceKind::kPull)] = {"TRANSPORT", 0.5};
+  sc.world.cap.crush_force_n = 2.0;
+  LockstepOptions o;
+  o.record_series = false;
+  const Report crushed = run_lockstep(sc, o).report;
+  ASSERT_TRUE(crushed.disturbance && crushed.fragile);
+  const double start = crushed.disturbance->pull.start_s;
+  ASSERT_TRUE(std::isfinite(start)) << "the carry came";
+  EXPECT_GT(start, 5.0);
+  EXPECT_DOUBLE_EQ(crushed.hold.grip_needed_n,
+                   (0.020 * (9.81 + crushed.hold.peak_accel_mps2) + 0.2) / 1.6);
+  // The need while carried includes the pull (the weight alone asks for 0.12 N).
+  EXPECT_GT(crushed.grip.steady_need_max_N, 0.9 * (0.020 * 9.81 + 0.2) / 1.6);
+  EXPECT_FALSE(crushed.dropped);
+  EXPECT_TRUE(crushed.fragile->broken);
+  EXPECT_GT(crushed.fragile->peak_grip_n, 2.0);
+  EXPECT_GT(crushed.fragile->broken_at_s, 0.0);
+  EXPECT_LT(crushed.fragile->broken_at_s, start) << "crushed by the grasp, before the carry";
+  EXPECT_FALSE(crushed.completed) << "a broken object fails the run";
+  EXPECT_EQ(crushed.end_reason, "done") << "the controller finished its task";
+  const nlohmann::json j = nlohmann::json::parse(report_json(crushed));
+  EXPECT_EQ(j.at("disturbance").at("pull").at("start_s"), start);
+  EXPECT_EQ(j.at("disturbance").at("pull").at("force_N"), 0.2);
+  EXPECT_FALSE(j.at("disturbance").contains("knock"));
+  EXPECT_EQ(j.at("fragile").at("broken"), true);
+  EXPECT_EQ(j.at("fragile").at("crush_force_N"), 2.0);
+
+  sc.world.cap.crush_force_n = 1.01 * crushed.fragile->peak_grip_n;
+  const Report whole = run_lockstep(sc, o).report;
+  ASSERT_TRUE(whole.fragile);
+  EXPECT_FALSE(whole.fragile->broken);
+  EXPECT_EQ(whole.fragile->peak_grip_n, crushed.fragile->peak_grip_n) << "the crush force is truth";
+  EXPECT_TRUE(whole.completed) << whole.end_reason;
+  EXPECT_TRUE(nlohmann::json::parse(report_json(whole)).at("fragile").at("broken_at_s").is_null());
+}
+
+// Without disturbance and crush force the report has neither key: every other report keeps its
+// bytes.
+TEST(Lockstep, NoDisturbanceNoKey) {
+  Report rep;
+  const nlohmann::json j = nlohmann::json::parse(report_json(rep));
+  EXPECT_FALSE(j.contains("disturbance"));
+  EXPECT_FALSE(j.contains("fragile"));
+}
+
 // A cap held to the table (the seed-20 sweep's scenario 7) rises off it by the anchor's stretch
 // for a few frames under the grip: the anchor holds it, not the fingers, so no frame is held and
 // the grip's ratios are null.

@@ -4,9 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "tactile/config/controller_file.hpp"
 #include "tactile/config/yaml.hpp"
@@ -124,6 +126,100 @@ TEST(Scenario, NegativeCaseKeys) {
   EXPECT_NE(e.find("unknown key 'held_to_tabel' in 'cap' (did you mean 'held_to_table'?)"),
             std::string::npos)
       << e;
+}
+
+// Disturbances and fragile objects (docs/rig.md, "Disturbances and fragile objects"): each key
+// optional, absent none; a start on the run's clock goes to the world, one timed from a stage waits
+// for it; directions are made unit vectors.
+TEST(Scenario, DisturbanceAndFragileKeys) {
+  const Scenario plain = parse_scenario(kMinimal, "s.yaml");
+  const DisturbanceParams& none = plain.world.disturbance;
+  EXPECT_EQ(none.pull.force_n, 0.0);
+  EXPECT_EQ(none.mass_step.added_kg, 0.0);
+  EXPECT_EQ(none.knock.impulse_ns, 0.0);
+  EXPECT_FALSE(std::isfinite(none.pull.start_s));
+  EXPECT_EQ(plain.world.cap.crush_force_n, 0.0);
+  for (const DisturbanceStart& start : plain.disturbance_start)
+    EXPECT_TRUE(start.stage.empty());
+
+  std::string text = kMinimal;
+  text.replace(text.find("friction: 0.8"), 13, "friction: 0.8, crush_force_n: 1.5");
+  text +=
+      "disturbance:\n"
+      "  pull: {force_n: 0.3, direction: [0, 3, -4], stage: TRANSPORT, start_s: 0.5,"
+      " ramp_s: 0.2, duration_s: 1.25}\n"
+      "  mass_step: {added_kg: 0.01, start_s: 12}\n"
+      "  knock: {impulse_ns: 0.004, direction: [2, 0, 0], stage: LIFT, start_s: 0.25}\n";
+  const Scenario s = parse_scenario(text, "s.yaml");
+  EXPECT_EQ(s.world.cap.crush_force_n, 1.5);
+  const DisturbanceParams& d = s.world.disturbance;
+  EXPECT_EQ(d.pull.force_n, 0.3);
+  EXPECT_DOUBLE_EQ(d.pull.direction.y, 0.6);
+  EXPECT_DOUBLE_EQ(d.pull.direction.z, -0.8);
+  EXPECT_EQ(d.pull.ramp_s, 0.2);
+  EXPECT_EQ(d.pull.duration_s, 1.25);
+  EXPECT_FALSE(std::isfinite(d.pull.start_s)) << "timed from its stage: not started yet";
+  const auto start = [&s](DisturbanceKind k) {
+    return s.disturbance_start[static_cast<std::size_t>(k)];
+  };
+  EXPECT_EQ(start(DisturbanceKind::kPull).stage, "TRANSPORT");
+  EXPECT_EQ(start(DisturbanceKind::kPull).after_s, 0.5);
+  EXPECT_EQ(d.mass_step.added_kg, 0.01);
+  EXPECT_EQ(d.mass_step.start_s, 12.0) << "on the run's clock";
+  EXPECT_TRUE(start(DisturbanceKind::kMassStep).stage.empty());
+  EXPECT_EQ(d.knock.impulse_ns, 0.004);
+  EXPECT_EQ(d.knock.direction.x, 1.0);
+  EXPECT_EQ(d.knock.duration_s, 0.005) << "the default: a few milliseconds";
+  EXPECT_EQ(start(DisturbanceKind::kKnock).stage, "LIFT");
+  EXPECT_EQ(start(DisturbanceKind::kKnock).after_s, 0.25);
+
+  // Defaults of the optional keys: the pull straight down, as a step, to the end of the run.
+  const Scenario pull_only =
+      parse_scenario(kMinimal + "disturbance: {pull: {force_n: 0.1, start_s: 3}}\n", "s.yaml");
+  EXPECT_EQ(pull_only.world.disturbance.pull.direction.z, -1.0);
+  EXPECT_EQ(pull_only.world.disturbance.pull.ramp_s, 0.0);
+  EXPECT_FALSE(std::isfinite(pull_only.world.disturbance.pull.duration_s));
+  EXPECT_EQ(pull_only.world.disturbance.pull.start_s, 3.0);
+  EXPECT_EQ(pull_only.world.disturbance.knock.impulse_ns, 0.0);
+}
+
+TEST(Scenario, BadDisturbanceAndFragileValuesNameKeyAndValue) {
+  const struct {
+    std::string yaml;
+    std::vector<std::string> says;
+  } cases[] = {
+      {"disturbance: {pull: {force_n: -1, start_s: 1}}\n", {"disturbance.pull.force_n", "-1"}},
+      {"disturbance: {pull: {force_n: 0.1}}\n", {"start_s", "missing"}},
+      {"disturbance: {pull: {force_n: 0.1, start_s: 1, direction: [0, 0, 0]}}\n",
+       {"disturbance.pull.direction", "[0, 0, 0]"}},
+      {"disturbance: {pull: {force_n: 0.1, start_s: 1, direction: [1, 0]}}\n",
+       {"disturbance.pull.direction", "[x, y, z]"}},
+      {"disturbance: {pull: {force_n: 0.1, start_s: 1, ramp_s: -2}}\n",
+       {"disturbance.pull.ramp_s", "-2"}},
+      {"disturbance: {pull: {force_n: 0.1, start_s: 1, duration_s: 0}}\n",
+       {"disturbance.pull.duration_s", "0"}},
+      {"disturbance: {pull: {force_n: 0.1, stage: TRANSPROT, start_s: 1}}\n",
+       {"disturbance.pull.stage", "TRANSPROT", "did you mean 'TRANSPORT'"}},
+      {"disturbance: {mass_step: {added_kg: 5, start_s: 1}}\n",
+       {"disturbance.mass_step.added_kg", "5"}},
+      {"disturbance: {knock: {impulse_ns: 0.01, start_s: 1, duration_s: 0.5}}\n",
+       {"disturbance.knock.duration_s", "0.5"}},
+      {"disturbance: {knock: {impulse_ns: 0, start_s: 1}}\n", {"disturbance.knock.impulse_ns"}},
+      {"disturbance: {nudge: {impulse_ns: 0.01, start_s: 1}}\n",
+       {"unknown key 'nudge' in 'disturbance'"}},
+      {"disturbance: {pull: {force: 0.1, start_s: 1}}\n", {"unknown key 'force'", "force_n"}},
+  };
+  for (const auto& c : cases) {
+    const std::string e = error_of(kMinimal + c.yaml);
+    EXPECT_NE(e.find("s.yaml:7"), std::string::npos) << c.yaml << e;
+    for (const std::string& word : c.says)
+      EXPECT_NE(e.find(word), std::string::npos) << c.yaml << " -> " << e;
+  }
+  std::string crush = kMinimal;
+  crush.replace(crush.find("friction: 0.8"), 13, "friction: 0.8, crush_force_n: -3");
+  const std::string e = error_of(crush);
+  EXPECT_NE(e.find("cap.crush_force_n"), std::string::npos) << e;
+  EXPECT_NE(e.find("-3"), std::string::npos) << e;
 }
 
 TEST(Scenario, ControllerOverridesAreKept) {

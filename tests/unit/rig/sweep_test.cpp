@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -19,6 +20,7 @@
 #include "tactile/rig/lockstep.hpp"
 #include "tactile/rig/scenario.hpp"
 #include "tactile/rig/scenario_run.hpp"
+#include "tactile/rig/world.hpp"
 #include "tactile/util/files.hpp"
 
 namespace {
@@ -29,6 +31,10 @@ using tactile::testing::ProcessResult;
 using tactile::testing::TempDir;
 
 constexpr const char* kRig = TACTILE_RIG_PATH;
+
+// FNV-1a 64 of the seed-20 sweep's first 40 scenario files (without `sim`) as rig --sweep wrote
+// them at 18f4c77, before the disturbances were drawn.
+constexpr std::uint64_t kMainSeed20Hash = 0x4ea99effbf2d8e4ULL;
 
 bool within(double v, sweep::Range r) {
   return v >= r.lo && v <= r.hi;
@@ -145,6 +151,147 @@ TEST(SweepDraw, AScenarioDependsOnlyOnTheSeedAndItsIndex) {
   EXPECT_EQ(sweep::scenario_yaml(sweep::draw_scenario(5, 123)), sweep::scenario_yaml(late));
   EXPECT_NE(sweep::scenario_yaml(sweep::draw_scenario(6, 123)), sweep::scenario_yaml(late));
   EXPECT_NE(sweep::scenario_yaml(sweep::draw_scenario(5, 124)), sweep::scenario_yaml(late));
+}
+
+// The disturbances' and fragility's shares (docs/slip.md, "Disturbances and fragile objects") over
+// 1000 draws: a third disturbed, the four kinds alike, a fifth fragile; each value within its
+// documented range and stated exactly by the file.
+TEST(SweepDraw, DisturbancesAndFragileObjectsAreDrawnInTheirShares) {
+  constexpr std::uint64_t kDraws = 1000;
+  std::size_t disturbed = 0, fragile = 0;
+  std::array<std::size_t, 5> kinds{};
+  for (std::uint64_t i = 0; i < kDraws; ++i) {
+    const sweep::Draw d = sweep::draw_scenario(20, i);
+    ++kinds[static_cast<std::size_t>(d.disturbance)];
+    disturbed += d.disturbance != sweep::Disturbance::kNone ? 1 : 0;
+    const tactile::rig::Scenario s =
+        tactile::rig::parse_scenario(sweep::scenario_yaml(d), "drawn.yaml");
+    const tactile::rig::DisturbanceParams& w = s.world.disturbance;
+    const auto& start = s.disturbance_start;
+    const double weight = d.mass_kg * 9.81;
+    switch (d.disturbance) {
+      case sweep::Disturbance::kPullStep:
+      case sweep::Disturbance::kPullRamp:
+        EXPECT_EQ(w.pull.force_n, d.pull_n);
+        EXPECT_GE(d.pull_n, 0.5 * weight - 1e-6);
+        EXPECT_LE(d.pull_n, 2.0 * weight + 1e-6);
+        EXPECT_TRUE(within(d.pull_duration_s, sweep::kPullDurationS));
+        EXPECT_EQ(w.pull.duration_s, d.pull_duration_s);
+        EXPECT_EQ(w.pull.ramp_s, d.pull_ramp_s);
+        EXPECT_EQ(d.pull_ramp_s > 0, d.disturbance == sweep::Disturbance::kPullRamp);
+        EXPECT_NEAR(tactile::norm(w.pull.direction), 1.0, 1e-12);
+        EXPECT_LE(w.pull.direction.z, 1e-12) << "horizontal or down";
+        EXPECT_EQ(start[0].stage, "TRANSPORT");
+        EXPECT_EQ(start[0].after_s, d.after_s);
+        break;
+      case sweep::Disturbance::kMassStep:
+        EXPECT_EQ(w.mass_step.added_kg, d.added_kg);
+        EXPECT_GE(d.added_kg, 0.5 * d.mass_kg - 1e-5);
+        EXPECT_LE(d.added_kg, 2.0 * d.mass_kg + 1e-5);
+        EXPECT_EQ(start[1].stage, "TRANSPORT");
+        break;
+      case sweep::Disturbance::kKnock:
+        EXPECT_EQ(w.knock.impulse_ns, d.impulse_ns);
+        EXPECT_GE(d.impulse_ns, 0.05 * d.mass_kg - 1e-7);
+        EXPECT_LE(d.impulse_ns, 0.3 * d.mass_kg + 1e-7);
+        EXPECT_EQ(w.knock.duration_s, sweep::kKnockDurationS);
+        EXPECT_EQ(start[2].stage, "TRANSPORT");
+        break;
+      case sweep::Disturbance::kNone:
+        EXPECT_EQ(w.pull.force_n + w.mass_step.added_kg + w.knock.impulse_ns, 0.0);
+        break;
+    }
+    if (d.disturbance != sweep::Disturbance::kNone) {
+      EXPECT_TRUE(within(d.after_s, sweep::kDisturbanceAfterS)) << d.after_s;
+    }
+    EXPECT_EQ(s.world.cap.crush_force_n, d.crush_force_n);
+    if (d.crush_force_n > 0) {
+      ++fragile;
+      // 2 to 6 times the least holding force of this scenario, its disturbance included.
+      const double need = tactile::rig::hold_need(s.world, 2.5).grip_needed_n;
+      EXPECT_GE(d.crush_force_n, 2.0 * need - 1e-4) << i;
+      EXPECT_LE(d.crush_force_n, 6.0 * need + 1e-4) << i;
+    }
+  }
+  // Binomial: a third of 1000 has a standard deviation of 15, a fifth 13, a twelfth 9.
+  EXPECT_NEAR(static_cast<double>(disturbed), kDraws / 3.0, 50.0);
+  EXPECT_NEAR(static_cast<double>(fragile), kDraws / 5.0, 40.0);
+  for (std::size_t k = 1; k < kinds.size(); ++k)
+    EXPECT_NEAR(static_cast<double>(kinds[k]), kDraws / 12.0, 30.0) << k;
+  EXPECT_STREQ(sweep::to_string(sweep::Disturbance::kPullRamp), "pull_ramp");
+}
+
+// The disturbances come from their own generator: every other value of a scenario, and so its
+// file without the new keys, is the draw from before they were drawn (the seed-20 files of
+// 18f4c77, as rig --sweep wrote them there, FNV-1a 64 over the 40 files in order).
+std::string without_disturbance(std::string y) {
+  std::string out;
+  std::size_t at = 0;
+  while (at < y.size()) {
+    const std::size_t end = y.find('\n', at) + 1;
+    const std::string line = y.substr(at, end - at);
+    at = end;
+    if (line.rfind("disturbance:", 0) == 0 || line.rfind("# Disturbance", 0) == 0 ||
+        line.rfind("# Fragile", 0) == 0)
+      continue;
+    out += line;
+  }
+  const std::size_t crush = out.find("crush_force_n: ");
+  if (crush != std::string::npos) out.erase(crush, out.find(", ", crush) + 2 - crush);
+  return out;
+}
+
+TEST(SweepDraw, TheDisturbancesLeaveEveryOtherValueAsItWas) {
+  std::uint64_t hash = 0xcbf29ce484222325ULL;
+  bool new_keys = false;
+  for (std::uint64_t i = 0; i < 40; ++i) {
+    const std::string y = sweep::scenario_yaml(sweep::draw_scenario(20, i));
+    const std::string old = without_disturbance(y);
+    new_keys = new_keys || old != y;
+    for (const unsigned char c : old) {
+      hash ^= c;
+      hash *= 0x100000001b3ULL;
+    }
+  }
+  EXPECT_TRUE(new_keys) << "some of the 40 are disturbed or fragile";
+  EXPECT_EQ(hash, kMainSeed20Hash);
+  // Deterministic per (seed, index), whatever was drawn before.
+  const sweep::Draw late = sweep::draw_scenario(20, 37);
+  for (std::uint64_t i = 0; i < 37; ++i)
+    sweep::draw_scenario(20, i);
+  EXPECT_EQ(sweep::scenario_yaml(sweep::draw_scenario(20, 37)), sweep::scenario_yaml(late));
+}
+
+// The table's disturbance and fragility: the kind and crush force from the draw, broken from the
+// report; the summary counts them per kind and a broken object as not completed.
+TEST(SweepTable, DisturbanceAndBrokenComeFromTheDrawAndTheReport) {
+  sweep::Draw d = sweep::draw_scenario(1, 0);
+  d.disturbance = sweep::Disturbance::kKnock;
+  d.crush_force_n = 1.25;
+  tactile::rig::Report rep;
+  rep.completed = false;
+  tactile::rig::CrushTruth crush;
+  crush.crush_force_n = 1.25;
+  crush.peak_grip_n = 2.5;
+  crush.broken = true;
+  rep.fragile = crush;
+  const sweep::Row row = sweep::rows_from_report(d, tactile::rig::report_json(rep)).at(0);
+  EXPECT_EQ(row.at("disturbance"), "knock");
+  EXPECT_EQ(row.number("crush_force_N"), 1.25);
+  EXPECT_EQ(row.at("broken"), "true");
+  EXPECT_EQ(row.number("peak_grip_over_crush"), 2.0);
+  const sweep::Row plain =
+      sweep::rows_from_report(sweep::draw_scenario(1, 0), tactile::rig::report_json({})).at(0);
+  const std::string summary = sweep::summary_markdown({row, plain}, {});
+  EXPECT_NE(summary.find("| knock | 1 | 0 | 0 | 0 | 1 | 1 |"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("| fragile object broken | 1 of 2 (50.0 %) |"), std::string::npos)
+      << summary;
+  EXPECT_EQ(sweep::csv_text(sweep::parse_csv(sweep::csv_text({row, plain}), "x.csv")),
+            sweep::csv_text({row, plain}));
+  // A failed run keeps what was drawn.
+  const sweep::Row failed = sweep::failed_row(d, "paper", 1, "boom");
+  EXPECT_EQ(failed.at("disturbance"), "knock");
+  EXPECT_EQ(failed.at("broken"), "");
 }
 
 TEST(SweepTable, CsvReadsBackAsWritten) {

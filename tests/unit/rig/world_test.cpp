@@ -606,5 +606,219 @@ TEST(Truth, SlipEpisodesFollowTheRule) {
   EXPECT_GT(sliding, 0);
 }
 
+// --- disturbances and fragile objects (docs/rig.md, "Disturbances and fragile objects") --------
+
+// A cap with nothing touching it and no gravity: what moves it is the disturbance alone.
+WorldParams free_cap() {
+  WorldParams p;
+  p.gravity_mps2 = 0;
+  p.arm.vibration_m = 0;
+  p.cap.mass_kg = 0.010;
+  return p;
+}
+
+// Steps `w` by 1e-4 s until its clock reaches `t_s`.
+void run_to(World& w, double t_s) {
+  while (w.time() < t_s - 5e-5)
+    ASSERT_TRUE(w.step(1e-4));
+}
+
+TEST(Disturbance, APullAcceleratesAFreeCapByForceOverMass) {
+  WorldParams p = free_cap();
+  p.disturbance.pull.force_n = 0.02;
+  p.disturbance.pull.direction = {0, 1, 0};
+  p.disturbance.pull.start_s = 0.01;
+  p.disturbance.pull.duration_s = 0.1;
+  World w(p);
+  run_to(w, 0.01);
+  EXPECT_EQ(norm(w.cap().velocity_mps), 0.0) << "nothing before its start";
+  run_to(w, 0.03);
+  const double v1 = w.cap().velocity_mps.y;
+  EXPECT_NEAR(w.external_force_n().y, 0.02, 1e-12);
+  run_to(w, 0.05);
+  const double v2 = w.cap().velocity_mps.y;
+  EXPECT_NEAR((v2 - v1) / 0.02, 0.02 / 0.010, 1e-9) << "a = F / m";
+  EXPECT_NEAR(w.cap().velocity_mps.x, 0.0, 1e-15);
+  run_to(w, 0.2);
+  EXPECT_NEAR(w.cap().velocity_mps.y, 0.02 * 0.1 / 0.010, 1e-9) << "F duration / m, then nothing";
+  EXPECT_EQ(w.external_force_n().y, 0.0);
+}
+
+// A ramp rises linearly over ramp_s: its impulse over the pulse is F (duration - ramp / 2).
+TEST(Disturbance, ARampedPullCarriesItsImpulse) {
+  WorldParams p = free_cap();
+  p.disturbance.pull = {0.02, {1, 0, 0}, 0.01, 0.02, 0.1};
+  World w(p);
+  run_to(w, 0.02);
+  EXPECT_NEAR(w.external_force_n().x, 0.02 * (0.02 - 0.01 - 0.5e-4) / 0.02, 1e-12)
+      << "halfway up the ramp";
+  run_to(w, 0.2);
+  EXPECT_NEAR(0.010 * w.cap().velocity_mps.x, 0.02 * (0.1 - 0.01), 1e-12);
+}
+
+// The mass step changes the cap's mass from its start on: the same pull accelerates it less.
+TEST(Disturbance, AMassStepChangesTheCapsMassFromThenOn) {
+  WorldParams p = free_cap();
+  p.disturbance.pull = {0.02, {0, 1, 0}, 0.0, 0.0, kNotYet};
+  p.disturbance.mass_step = {0.010, 0.05};
+  World w(p);
+  run_to(w, 0.02);
+  EXPECT_EQ(w.cap_mass_kg(), 0.010);
+  double v = w.cap().velocity_mps.y;
+  run_to(w, 0.04);
+  EXPECT_NEAR((w.cap().velocity_mps.y - v) / 0.02, 2.0, 1e-9);
+  run_to(w, 0.06);
+  EXPECT_EQ(w.cap_mass_kg(), 0.020);
+  EXPECT_EQ(cap_mass_kg(p, 0.0499), 0.010);
+  EXPECT_EQ(cap_mass_kg(p, 0.05), 0.020);
+  v = w.cap().velocity_mps.y;
+  run_to(w, 0.08);
+  EXPECT_NEAR((w.cap().velocity_mps.y - v) / 0.02, 1.0, 1e-9) << "F / (m + added)";
+}
+
+// A knock's impulse is the cap's change of momentum, whatever its start against the step grid.
+TEST(Disturbance, AKnocksImpulseIsTheCapsChangeOfMomentum) {
+  WorldParams p = free_cap();
+  p.disturbance.knock = {0.001, {0, 0.6, 0.8}, 0.012345, 0.005};
+  World w(p);
+  run_to(w, 0.012);
+  EXPECT_EQ(norm(w.cap().velocity_mps), 0.0);
+  run_to(w, 0.014);
+  EXPECT_NEAR(norm(w.external_force_n()), 0.001 / 0.005, 1e-12) << "J / duration within it";
+  run_to(w, 0.05);
+  const Vec3 momentum = 0.010 * w.cap().velocity_mps;
+  EXPECT_NEAR(momentum.x, 0.0, 1e-15);
+  EXPECT_NEAR(momentum.y, 0.0006, 1e-12);
+  EXPECT_NEAR(momentum.z, 0.0008, 1e-12);
+  // Over any interval, the impulse integrated exactly.
+  const Vec3 j = external_impulse_ns(p.disturbance, 0.0, 1.0);
+  EXPECT_NEAR(j.y, 0.0006, 1e-15);
+  EXPECT_NEAR(external_impulse_ns(p.disturbance, 0.0, 0.012345 + 0.0025).z, 0.0004, 1e-15);
+}
+
+// A start timed from a stage is set by the run once; a start on the run's clock stays.
+TEST(Disturbance, AStagesStartIsTheFirstOneGiven) {
+  WorldParams p = free_cap();
+  p.disturbance.pull = {0.02, {0, 1, 0}, kNotYet, 0.0, kNotYet};
+  p.disturbance.knock = {0.001, {1, 0, 0}, 0.5, 0.005};
+  World w(p);
+  run_to(w, 0.01);
+  EXPECT_EQ(norm(w.cap().velocity_mps), 0.0) << "its stage has not come";
+  w.start_disturbance(DisturbanceKind::kPull, 0.02);
+  w.start_disturbance(DisturbanceKind::kPull, 0.015);
+  w.start_disturbance(DisturbanceKind::kKnock, 0.03);
+  EXPECT_EQ(w.params().disturbance.pull.start_s, 0.02);
+  EXPECT_EQ(w.params().disturbance.knock.start_s, 0.5);
+  run_to(w, 0.04);
+  EXPECT_NEAR(w.cap().velocity_mps.y, 2.0 * 0.02, 1e-9);
+  EXPECT_EQ(w.cap().velocity_mps.x, 0.0);
+}
+
+// The least grip with a disturbance (docs/rig.md): the fingers hold against m (a - g) - F_ext, with
+// the cap's mass then. Hand-computed: 20 g, mu_s 0.8, R 15 mm, squeeze axis x; weight 0.1962 N.
+TEST(GripTruth, LeastGripAddsTheExternalForceAndUsesTheMassThen) {
+  WorldParams p;
+  p.cap.mass_kg = 0.02;
+  p.cap.radius_m = 0.015;
+  p.cap.friction = 0.8;
+  const struct {
+    const char* what;
+    Vec3 accel;
+    double torque;
+    double mass;
+    Vec3 force;
+    double need;
+  } cases[] = {
+      {"no disturbance", {0, 0, 0}, 0, 0.02, {0, 0, 0}, 0.122625},
+      {"pulled down by 0.1 N", {0, 0, 0}, 0, 0.02, {0, 0, -0.1}, 0.185125},
+      {"pulled up by the weight", {0, 0, 0}, 0, 0.02, {0, 0, 0.1962}, 0.0},
+      {"pulled across the squeeze", {0, 0, 0}, 0, 0.02, {0, 0.1, 0}, 0.1376340823524464},
+      {"pulled along the squeeze", {0, 0, 0}, 0, 0.02, {0.1, 0, 0}, 0.122625},
+      {"a mass step to 40 g", {0, 0, 0}, 0, 0.04, {0, 0, 0}, 0.24525},
+      {"40 g accelerating up 2 m/s^2", {0, 0, 2.0}, 0, 0.04, {0, 0, 0}, 0.29525},
+      {"40 g pulled down by 0.1 N", {0, 0, 0}, 0, 0.04, {0, 0, -0.1}, 0.30775},
+      {"pulled across, and the twist", {0, 0, 0}, 0.01, 0.02, {0, 0.1, 0}, 0.4946085169802926},
+  };
+  for (const auto& c : cases)
+    EXPECT_NEAR(grip_needed_n(p, c.accel, {1, 0, 0}, c.torque, c.mass, c.force), c.need, 1e-12)
+        << c.what;
+}
+
+// hold_need accounts for the largest disturbance: the mass after the step, and the pull's or the
+// knock's force with its vertical part on the weight and its horizontal part across the squeeze.
+TEST(GripTruth, HoldNeedTakesTheLargestDisturbance) {
+  WorldParams p;
+  p.cap.mass_kg = 0.02;
+  p.cap.friction = 0.8;
+  const double a = hold_need(p, 2.5).peak_accel_mps2;
+  const double load = 0.02 * (9.81 + a);
+  EXPECT_DOUBLE_EQ(hold_need(p, 2.5).grip_needed_n, load / 1.6);
+  WorldParams pulled = p;
+  pulled.disturbance.pull = {0.1, {0.6, 0, -0.8}, kNotYet, 0, kNotYet};
+  EXPECT_NEAR(hold_need(pulled, 2.5).grip_needed_n, std::hypot(load + 0.08, 0.06) / 1.6, 1e-12);
+  WorldParams knocked = p;
+  knocked.disturbance.knock = {0.002, {0, 1, 0}, kNotYet, 0.005};  // 0.4 N for 5 ms
+  EXPECT_NEAR(hold_need(knocked, 2.5).grip_needed_n, std::hypot(load, 0.4) / 1.6, 1e-12);
+  WorldParams loaded = p;
+  loaded.disturbance.mass_step = {0.02, kNotYet};
+  EXPECT_NEAR(hold_need(loaded, 2.5).grip_needed_n, 2 * load / 1.6, 1e-12);
+  // All three: the heavier cap, and the larger of the two forces.
+  WorldParams all = p;
+  all.disturbance = {pulled.disturbance.pull, loaded.disturbance.mass_step,
+                     knocked.disturbance.knock};
+  EXPECT_NEAR(hold_need(all, 2.5).grip_needed_n, std::hypot(2 * load, 0.4) / 1.6, 1e-12);
+}
+
+// The grip's truth of a lifted cap under a downward pull: its weight and the pull, then the weight
+// alone once the pull ends.
+TEST(GripTruth, AHeldCapsNeedIncludesThePull) {
+  WorldParams p;
+  p.disturbance.pull = {0.1, {0, 0, -1}, kNotYet, 0, 0.2};
+  World w = grasp_and_lift(p, 1e-4, 0.5);
+  TruthRecorder truth(0.04, 0.1);
+  w.start_disturbance(DisturbanceKind::kPull, w.time());
+  for (int s = 0; s < 500; ++s)
+    ASSERT_TRUE(w.step(1e-4));
+  GripTruth g = grip_truth(w, truth.take(w, 1, 0.004));
+  EXPECT_TRUE(g.held);
+  const double weight = p.cap.mass_kg * p.gravity_mps2;
+  EXPECT_NEAR(g.needed_n, (weight + 0.1) / (2 * p.cap.friction), 1e-9);
+  for (int s = 0; s < 2000; ++s)
+    ASSERT_TRUE(w.step(1e-4));
+  g = grip_truth(w, truth.take(w, 2, 0.004));
+  EXPECT_TRUE(g.held) << "the paper's grip holds it through the pull";
+  EXPECT_NEAR(g.needed_n, weight / (2 * p.cap.friction), 1e-9);
+}
+
+// A fragile object breaks at the first frame whose larger fingertip grip exceeds its crush force,
+// not before (a grip equal to it does not break it), and stays broken.
+TEST(GripTruth, BrokenAtTheFirstFramePastTheCrushForce) {
+  CrushTruth crush;
+  crush.crush_force_n = 2.0;
+  const struct {
+    double t;
+    std::array<double, kFingertips> applied;
+    bool broken;
+  } frames[] = {
+      {0.01, {0.0, 0.0}, false}, {0.02, {1.5, 1.9}, false}, {0.03, {2.0, 1.8}, false},
+      {0.04, {1.9, 2.05}, true}, {0.05, {0.5, 0.5}, true},  {0.06, {3.0, 3.0}, true},
+  };
+  for (const auto& f : frames) {
+    GripTruth g;
+    g.applied_n = f.applied;
+    crush.add(f.t, g);
+    EXPECT_EQ(crush.broken, f.broken) << f.t;
+  }
+  EXPECT_EQ(crush.broken_at_s, 0.04);
+  EXPECT_EQ(crush.peak_grip_n, 3.0);
+  // Not fragile: never broken, the peak grip kept.
+  CrushTruth sturdy;
+  GripTruth g;
+  g.applied_n = {40.0, 40.0};
+  sturdy.add(0.1, g);
+  EXPECT_FALSE(sturdy.broken);
+  EXPECT_EQ(sturdy.peak_grip_n, 40.0);
+}
+
 }  // namespace
 }  // namespace tactile::rig

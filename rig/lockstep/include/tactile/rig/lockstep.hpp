@@ -158,8 +158,17 @@ struct Report {
   std::string scenario_case = "normal";
   std::optional<bool> negative_case_passed;
   bool opened_in_air = false;
-  // Whether the hand can hold this cap within F2 (truth: weight, peak acceleration, mu_s).
+  // Whether the hand can hold this cap within F2 (truth: weight, peak acceleration, mu_s; the
+  // largest disturbance).
   HoldNeed hold;
+  // The scenario's disturbances as applied, written as `disturbance` when the scenario has one:
+  // each set one's magnitude, direction and timing, its start on the run's clock (null: its stage
+  // never came). Absent: no key, the report as without disturbances.
+  std::optional<DisturbanceParams> disturbance;
+  // A fragile object (cap.crush_force_n), written as `fragile`: the crush force, whether the grip
+  // broke it and when, the largest grip applied. A broken object fails the run: `completed` and
+  // `negative_case_passed` are false. Absent: no key.
+  std::optional<CrushTruth> fragile;
   GripMetrics grip;
   // The controller the run scored: its slip detector and its grip (control::to_string of the
   // scenario's controller configuration), written as `controller`, before `grip` and

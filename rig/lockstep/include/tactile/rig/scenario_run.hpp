@@ -31,6 +31,9 @@ void judge_negative_case(Report& report);
 // arm holds). The real-time rig's ArmState and the lockstep runner's feedback both come from it.
 control::ArmFeedback arm_feedback(const World& world);
 
+// Whether the world has a disturbance (a pull, a mass step or a knock: docs/rig.md).
+bool has_disturbance(const DisturbanceParams& d);
+
 // A drop by command: the fingers told to open with nothing under the cap (neither the table nor
 // the bottle), Report::opened_in_air.
 bool opens_in_air(control::CommandKind command, CapPlace cap);
@@ -62,7 +65,9 @@ class ScenarioRun {
   // of `phase`, the phase the controller was in when the frame was taken.
   const GroundTruth& take_truth(std::uint64_t frame, control::Phase phase);
   // Scores `truth`, taken for frame `frame` at `t_s` (counted from the run's start), with the
-  // controller's state then, the hand's pose and the grip's truth (grip_truth) now.
+  // controller's state then, the hand's pose and the grip's truth (grip_truth) now. A disturbance
+  // timed from the controller's stage then starts (its time into the stage from now on the
+  // world's clock) the first time that stage is seen.
   void score_truth(std::uint64_t frame, double t_s, const GroundTruth& truth,
                    const ControllerState& controller);
   // The arm's motion as its controller sees it from the reported wrist pose at `t_s`.
@@ -85,6 +90,8 @@ class ScenarioRun {
   void finish(double sim_time_s, std::uint64_t frames);
 
  private:
+  void start_staged_disturbances(control::Phase phase);
+
   const Scenario& sc_;
   LockstepResult& result_;
   const control::Config cfg_;

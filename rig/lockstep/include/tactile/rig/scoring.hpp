@@ -107,8 +107,14 @@ class RunScorer {
   // then and the hand's pose: a series sample, the cap and tightening facts.
   void add_truth(std::uint64_t frame, double t, const GroundTruth& truth,
                  const ControllerState& controller, const FramePose& pose);
-  // The grip's truth of the same frame, at `t` (the report's `grip`).
-  void add_grip(double t, const GripTruth& grip) { grip_.add(t, grip); }
+  // The grip's truth of the same frame, at `t` (the report's `grip`, and `fragile`).
+  void add_grip(double t, const GripTruth& grip) {
+    grip_.add(t, grip);
+    crush_.add(t, grip);
+  }
+  // The object breaks under a grip above `crush_force_n` (cap.crush_force_n; 0: not fragile,
+  // the report has no `fragile`).
+  void score_crush(double crush_force_n) { crush_.crush_force_n = crush_force_n; }
   // One measured frame of one fingertip with the truth of the same frame (add_truth first).
   // `phase` is the controller's phase the frame was taken in: it sets the slip threshold; `arm`
   // the arm's motion the controller saw with it (control::ArmMotionEstimator on the reported
@@ -156,6 +162,7 @@ class RunScorer {
   std::uint32_t easy_seen_ = 0;
   IncipientLead lead_;
   GripScorer grip_;
+  CrushTruth crush_;
   // The ideal sensor's readings: the truth's forces and per-frame shear displacement.
   struct IdealTip {
     std::array<ElementReading, kElementsPerFingertip> readings{};

@@ -52,8 +52,8 @@ struct GroundTruth {
 // The grip's truth at one instant (docs/rig.md, "The grip's truth"), for the report's `grip`.
 struct GripTruth {
   // The least total normal force per fingertip that holds the cap now (grip_needed_n): its
-  // weight, the wrist's actual acceleration (vibration included) and, on the thread, the
-  // thread's resisting torque.
+  // weight, the wrist's actual acceleration (vibration included), on the thread the thread's
+  // resisting torque, and a disturbance's external force and added mass.
   double needed_n = 0;
   // The grip applied: each fingertip's total normal force on the cap.
   std::array<double, kFingertips> applied_n{};
@@ -67,6 +67,18 @@ struct GripTruth {
 };
 // From the world now and the frame's truth just taken from it (TruthRecorder::take).
 GripTruth grip_truth(const World& world, const GroundTruth& truth);
+
+// A fragile object's truth (cap.crush_force_n; docs/rig.md, "Disturbances and fragile objects"):
+// broken from the first frame whose applied grip, the larger fingertip's total normal force on
+// the cap, exceeds the crush force; and the largest grip applied over the run. Allocates nothing.
+struct CrushTruth {
+  double crush_force_n = 0;  // 0: not fragile, never broken
+  double peak_grip_n = 0;
+  bool broken = false;
+  double broken_at_s = 0;  // the frame's time, when broken
+  // One frame's grip truth, at `t_s`.
+  void add(double t_s, const GripTruth& grip) noexcept;
+};
 
 // Builds the truth of each frame from the world and keeps the slip-episode state. No
 // allocation; take() clears the world's per-frame accumulators.

@@ -9,6 +9,7 @@
 // advances the world by dt with the command last applied.
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -36,6 +37,9 @@ struct CapParams {
   // by a stiff anchor (the table's own stiffness and damping, horizontally and upward) that no
   // grip within F2 can pull it out of. It can still turn.
   bool held_to_table = false;
+  // A fragile object (docs/rig.md, "Disturbances and fragile objects"): the grip, the larger
+  // fingertip's total normal force on the cap, at which it breaks. 0: not fragile.
+  double crush_force_n = 0;
 };
 
 struct BottleParams {
@@ -81,11 +85,46 @@ struct FingertipParams {
   PiecewiseLinear shear_curve{{0.0, 0.02, 0.08}, {0.0, 0.05, 0.4}};
 };
 
+// External disturbances of the cap (docs/rig.md, "Disturbances and fragile objects"), each off
+// while its magnitude is 0. A start time is on the world's clock; a start not known yet (a time
+// into a stage of the task, World::start_disturbance sets it when the stage begins) is infinite.
+inline constexpr double kNotYet = std::numeric_limits<double>::infinity();
+
+// A pull on the cap: force_n along `direction` (world frame, unit), from start_s for duration_s;
+// rising linearly over ramp_s (0: a step).
+struct PullParams {
+  double force_n = 0;
+  Vec3 direction{0, 0, -1};
+  double start_s = kNotYet;
+  double ramp_s = 0;
+  double duration_s = kNotYet;
+};
+// A load added to the cap: its mass grows by added_kg from start_s on (moving with the cap).
+struct MassStepParams {
+  double added_kg = 0;
+  double start_s = kNotYet;
+};
+// A knock: the impulse impulse_ns along `direction` (world frame, unit), as a constant force
+// over duration_s from start_s.
+struct KnockParams {
+  double impulse_ns = 0;
+  Vec3 direction{1, 0, 0};
+  double start_s = kNotYet;
+  double duration_s = 0.005;
+};
+enum class DisturbanceKind : std::uint8_t { kPull, kMassStep, kKnock };
+struct DisturbanceParams {
+  PullParams pull;
+  MassStepParams mass_step;
+  KnockParams knock;
+};
+
 struct WorldParams {
   CapParams cap;
   BottleParams bottle;
   ArmParams arm;
   FingertipParams fingertip;
+  DisturbanceParams disturbance;
   double gravity_mps2 = 9.81;
   double table_stiffness_npm = 200000.0;
   double table_damping_nspm = 20.0;
@@ -93,6 +132,12 @@ struct WorldParams {
   double seat_damping_nspm = 20.0;
   double slip_speed_eps_mps = 0.001;  // regularisation of table and thread friction
 };
+
+// The external force's impulse on the cap over [t0_s, t1_s] (N s, world frame): the pull's and
+// the knock's, integrated exactly, so that a step of any length carries its share.
+Vec3 external_impulse_ns(const DisturbanceParams& d, double t0_s, double t1_s);
+// The cap's mass at `t_s`: its own, plus the load added by then.
+double cap_mass_kg(const WorldParams& p, double t_s);
 
 // --- commands (the arm controller's side of ArmCommand) ----------------------------------------
 
@@ -184,7 +229,15 @@ struct ArmState {
 // share the cap's weight and inertia equally; the torque is a couple at the cap's radius; each
 // fingertip's tangential demand is the vector sum of its shares. The load along `squeeze_axis`
 // (a horizontal unit vector from one fingertip to the other) is carried by the normal forces.
-double grip_needed_n(const WorldParams& p, Vec3 accel_mps2, Vec3 squeeze_axis, double torque_nm);
+// With a disturbance: the cap's mass then (`mass_kg`) and the external force on it
+// (`external_force_n`, world frame), which the fingers must hold against as well.
+double grip_needed_n(const WorldParams& p, Vec3 accel_mps2, Vec3 squeeze_axis, double torque_nm,
+                     double mass_kg, Vec3 external_force_n);
+// The same for the cap's own mass and no external force.
+inline double grip_needed_n(const WorldParams& p, Vec3 accel_mps2, Vec3 squeeze_axis,
+                            double torque_nm) {
+  return grip_needed_n(p, accel_mps2, squeeze_axis, torque_nm, p.cap.mass_kg, {});
+}
 
 // Whether the hand can hold the cap within F2, from the world's parameters alone (docs/rig.md,
 // "Holding within F2"): the grip each fingertip needs to carry the cap's weight and its peak
@@ -193,7 +246,11 @@ struct HoldNeed {
   // The wrist's acceleration bound (arm.max_accel_mps2) plus the vibration's peak,
   // (2 pi f)^2 A, both taken along gravity.
   double peak_accel_mps2 = 0;
-  // Per fingertip: m (g + peak_accel) / (2 mu_s), grip_needed_n() of the peak along gravity.
+  // Per fingertip: m (g + peak_accel) / (2 mu_s), grip_needed_n() of the peak along gravity;
+  // with disturbances, the largest of them as well (docs/rig.md, "Disturbances and fragile
+  // objects"): the heavier mass after a mass step, and the pull's or the knock's force, whichever
+  // asks for more, its vertical part adding to the load and its horizontal part across the
+  // squeeze.
   double grip_needed_n = 0;
   // Per fingertip: the sum of the elements' normal forces on the cap when the most pressed one
   // (the apex) carries F2, from the dome's element layout against the cap's cylinder.
@@ -231,6 +288,14 @@ class World {
   // the feelers' bases move with it).
   Vec3 wrist_accel_actual() const noexcept;
 
+  // The cap's mass now (its own plus a load added, DisturbanceParams::mass_step), and the
+  // external force on it over the last step (the pull's and the knock's, world frame).
+  double cap_mass_kg() const noexcept;
+  Vec3 external_force_n() const noexcept { return external_force_n_; }
+  // A disturbance timed from a stage of the task starts at `t_s` (the run sets it when the stage
+  // begins); the first call for a kind counts.
+  void start_disturbance(DisturbanceKind kind, double t_s) noexcept;
+
   // Clears the per-frame accumulators (releases, surface motion) after a frame was taken.
   void clear_frame_accumulators() noexcept;
 
@@ -256,6 +321,8 @@ class World {
   // every feeler lies within reach_m_ of it).
   bool out_of_reach(const Fingertip& t) const noexcept;
   void update_cap_place() noexcept;
+  // The pull's and the knock's force over the step [t, t + dt] into `force` (external_force_n).
+  void add_external_force(Vec3& force, double dt) noexcept;
   void update_tangential(const BaseMotion& b, double dt) noexcept;
   // What the table and the bottle neck add to the cap this step.
   struct Supports {
@@ -285,6 +352,7 @@ class World {
   double reach_m_ = 0;  // the farthest feeler tip from the apex
   // Whether any feeler of fingertip i is in contact (kept by contact_forces).
   std::array<bool, kFingertips> touching_{};
+  Vec3 external_force_n_;  // the pull's and the knock's over the last step
 };
 
 }  // namespace tactile::rig

@@ -1,6 +1,7 @@
 #pragma once
 
 // Scenario files for the rig (a fixed interface; every key and default in docs/rig.md).
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -13,6 +14,15 @@
 namespace tactile::rig {
 
 inline constexpr const char* kScenarioFormat = "tactile-scenario/1";
+
+// When a disturbance timed from a stage of the task starts (docs/rig.md, "Disturbances and
+// fragile objects"): after_s after the controller entered `stage` (a control::to_string(Phase)
+// name) for the first time. An empty stage: the start is on the run's clock, in the world's
+// DisturbanceParams already.
+struct DisturbanceStart {
+  std::string stage;
+  double after_s = 0;
+};
 
 struct Scenario {
   std::string source;  // file name, for messages
@@ -30,6 +40,9 @@ struct Scenario {
   std::vector<std::pair<std::string, double>> controller;
   // controller.slip_detector (paper, field, learned); empty: the control core's default.
   std::string slip_detector;
+  // The disturbances' starts by stage, indexed by DisturbanceKind (their forces, masses and
+  // absolute starts are in world.disturbance).
+  std::array<DisturbanceStart, 3> disturbance_start;
 
   // Physics steps per camera frame and the step that makes them fit exactly.
   int steps_per_frame() const;

@@ -4,6 +4,7 @@
 // each run in lockstep by a child `rig` process, scored from its report.json into one CSV row per
 // scenario and decision method, a summary table and a plot. The draw is deterministic per
 // (sweep seed, scenario index), so shards and job counts never change a scenario.
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -45,6 +46,32 @@ inline constexpr Range kDisplacementMm{60.0, 120.0};
 // the default, 0, lowers the cap onto the table, which is a support too.
 inline constexpr double kDisplacedLowerLimitM = 0.09;
 
+// The disturbances and fragile objects of the sweep (docs/slip.md, "Disturbances and fragile
+// objects"), drawn from a generator of their own per (sweep seed, index), so that every other value
+// of a scenario is what it was before they were drawn. A share of the scenarios gets one
+// disturbance, of a kind drawn with equal chances, timed from the carry (TRANSPORT); another,
+// independent share is fragile.
+enum class Disturbance : std::uint8_t { kNone, kPullStep, kPullRamp, kMassStep, kKnock };
+// "none", "pull_step", "pull_ramp", "mass_step", "knock": the CSV's `disturbance`.
+const char* to_string(Disturbance d);
+inline constexpr double kDisturbedShare = 1.0 / 3.0;
+inline constexpr double kFragileShare = 1.0 / 5.0;
+// The stage a disturbance is timed from, and its time into it.
+inline constexpr const char* kDisturbanceStage = "TRANSPORT";
+inline constexpr Range kDisturbanceAfterS{0.1, 1.0};
+// A pull: this many times the cap's weight, for this long; a ramp rises over ramp_s.
+inline constexpr Range kPullWeights{0.5, 2.0};
+inline constexpr Range kPullDurationS{0.3, 1.5};
+inline constexpr Range kPullRampS{0.1, 0.5};
+// A mass step: this many times the cap's mass added.
+inline constexpr Range kMassStepMasses{0.5, 2.0};
+// A knock: the cap's mass times this change of speed (m/s), over kKnockDurationS.
+inline constexpr Range kKnockSpeedMps{0.05, 0.3};
+inline constexpr double kKnockDurationS = 0.005;
+// A fragile object's crush force: this many times its least holding force (hold_need's
+// grip_needed_N, the disturbance included).
+inline constexpr Range kCrushOverNeed{2.0, 6.0};
+
 // One drawn scenario. Values are rounded to a fixed grid (0.1 g, 0.01 mm, 0.001, 0.1 deg, 1 um,
 // 0.01 Hz, 0.01 levels, whole fps) so that the scenario file states them exactly.
 struct Draw {
@@ -65,6 +92,18 @@ struct Draw {
   // kBottleDisplaced: bottle.displaced_mm.
   double displaced_x_mm = 0;
   double displaced_y_mm = 0;
+  // From the disturbances' own generator (kDisturbedShare, kFragileShare above).
+  Disturbance disturbance = Disturbance::kNone;
+  double pull_n = 0;           // kPullStep, kPullRamp
+  double pull_ramp_s = 0;      // kPullRamp
+  double pull_duration_s = 0;  // kPullStep, kPullRamp
+  double added_kg = 0;         // kMassStep
+  double impulse_ns = 0;       // kKnock
+  // The pull's or the knock's direction (world frame): one of 8 azimuths, horizontal, 45 degrees
+  // down or straight down.
+  std::array<double, 3> direction{0, 0, -1};
+  double after_s = 0;        // into kDisturbanceStage
+  double crush_force_n = 0;  // 0: not fragile
 };
 
 // Scenario `index` of the sweep with seed `sweep_seed`: depends on nothing else. Pure.
