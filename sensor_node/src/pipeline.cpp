@@ -278,8 +278,16 @@ void Pipeline::run(const std::atomic<bool>& stop) noexcept {
         } else if (r.status == ReferenceStatus::kWrongSize) {
           throw std::runtime_error(wrong_size(cfg_, frame.image));
         } else if (r.status != ReferenceStatus::kCollecting) {
-          util::log_warn("{}: reference {} (element {}, excess G {:.0f}); starting again",
-                         cfg_.sensor_id, to_string(r.status), r.element_id, r.value);
+          // A sensor touched while the reference is captured (or a camera whose image never
+          // settles) is refused on every frame, each time with another element and excess G:
+          // once a second, counted (the log's own limit sees each figure as a new line).
+          const util::RepeatLimiter::Decision d =
+              refusals_.offer(to_string(r.status), util::monotonic_ns());
+          if (d.write) {
+            util::log_warn("{}: reference {} (element {}, excess G {:.0f}); starting again{}",
+                           cfg_.sensor_id, to_string(r.status), r.element_id, r.value,
+                           util::repeated_suffix(d.held_back));
+          }
         }
         ++counters_.not_measured;
         publish(frame, v1::FRAME_STATUS_NO_REFERENCE, 0);

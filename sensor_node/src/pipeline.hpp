@@ -12,6 +12,7 @@
 #include "sensor_config.hpp"
 #include "tactile/camera/camera.hpp"
 #include "tactile/extractor.hpp"
+#include "tactile/util/repeat_limiter.hpp"
 #include "tactile/v1/log.pb.h"
 #include "tactile/v1/tactile.pb.h"
 #include "tactile/wire/sockets.hpp"
@@ -107,6 +108,7 @@ class Pipeline {
   std::string raw_bytes_;
   std::string raw_topic_;
   bool capturing_reference_ = false;
+  util::RepeatLimiter refusals_;  // the reference's refusals, once a second
   // The core was told to forget the previous frame since the last measured one (a replay must
   // do the same: docs/recording.md).
   bool forgot_pending_ = true;

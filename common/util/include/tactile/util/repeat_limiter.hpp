@@ -3,10 +3,7 @@
 // How often one log message may be written: at most once per period (a second for the programs'
 // warnings and errors, util::log_line), the copies in between counted and said with its next
 // writing, "... (repeated N times)". A fault met on every frame (a camera that sends images of
-// another size) then costs one line a second, not fifty. Messages that differ only in their
-// figures (each run of digits, with a decimal point inside it) are one message: "reference
-// refused (element 11, excess G 2000)" and "(element 0, excess G 1235)" repeat each other, and
-// the one written is the latest. Pure: time is an argument.
+// another size) then costs one line a second, not fifty. Pure: time is an argument.
 #include <array>
 #include <cstdint>
 #include <string>
@@ -28,12 +25,10 @@ class RepeatLimiter {
   Decision offer(std::string_view message, std::int64_t now_ns);
 
   static constexpr std::size_t kSlots = 16;
-  // Stands for a figure in a remembered message's shape.
-  static constexpr char kFigure = '\x1f';
 
  private:
   struct Slot {
-    std::string message;  // its shape: each figure as kFigure
+    std::string message;
     std::int64_t written_ns = 0;
     std::int64_t offered_ns = 0;
     std::uint64_t held_back = 0;
