@@ -30,6 +30,8 @@ struct Scenario {
   std::vector<std::pair<std::string, double>> controller;
   // controller.slip_detector (paper, field, learned); empty: the control core's default.
   std::string slip_detector;
+  // controller.grip (paper, margin); empty: the control core's default.
+  std::string grip;
 
   // Physics steps per camera frame and the step that makes them fit exactly.
   int steps_per_frame() const;
