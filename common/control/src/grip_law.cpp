@@ -121,7 +121,11 @@ void GripLaw::follow_slip(const Flags& flags, const GripContext& ctx, double now
   // Coulomb: no contact carries more than mu_s times its normal force.
   mu_hat_ = std::clamp(std::max(mu_hat_, ratio_peak_), cfg_.grip_mu_min, cfg_.grip_mu_max);
   if (reached) {
-    const double raised = std::max(demand_n_, grip_n_) * (1.0 + cfg_.grip_slip_step);
+    // A grip already past a raise of the demand did not slip for want of force (the arm's start
+    // or stop shakes a firm grip too): it stops relaxing there.
+    const double step = 1.0 + cfg_.grip_slip_step;
+    const double raised =
+        grip_n_ <= demand_n_ * step ? std::max(demand_n_, grip_n_) * step : grip_n_;
     target_n_ = std::min(std::max(target_n_, raised), kMaxTargetN);
   }
 }

@@ -123,14 +123,14 @@ TEST(GripLaw, NoSqueezePastTheF2Bound) {
 
 TEST(GripLaw, TheReferenceFollowsTheTargetAtTheForceRate) {
   Grip g;
-  g.press(0.2, 0.0);
+  g.press(0.2, 0.08);  // the demand: 0.08 / 0.5 x 1.25 = 0.2 N
   g.step();
   EXPECT_NEAR(g.law().reference_n(), 0.2, 1e-12) << "the reference starts at the grip";
   // A slip asks for 0.26 N at once; the reference takes it in steps of rate x dt.
   g.step(true);
   const double step = g.cfg().grip_force_rate_nps * kDt;
   EXPECT_NEAR(g.law().target_n(), 0.2 * (1 + g.cfg().grip_slip_step), 1e-12);
-  // A load that needs 4 N: the target jumps, the reference does not.
+  // A load that needs 3 N: the target jumps, the reference does not.
   g.press(0.2, 1.0);
   double before = g.law().reference_n();
   for (int i = 0; i < 5; ++i) {
@@ -204,18 +204,28 @@ TEST(GripLaw, FrictionEstimateRisesSlowlyAfterASafeWhileUpToTheSlipsCeiling) {
 
 TEST(GripLaw, TargetRaisedAtOnceOnSlipAndRelaxedAfterASafeWhile) {
   Grip g;
-  g.press(0.4, 0.1);  // demand 0.1 / 0.5 x 1.25 = 0.25 N
+  g.press(0.3, 0.1);  // demand 0.1 / 0.5 x 1.25 = 0.25 N
   g.step();
   EXPECT_NEAR(g.law().demand_n(), 0.25, 1e-12);
-  g.step(true);  // the ratio 0.25 lowers mu_hat by grip_mu_drop, to 0.35
+  g.step(true);  // the ratio 0.33 lowers mu_hat by grip_mu_drop, to 0.35
   const double raised = g.law().target_n();
-  EXPECT_NEAR(raised, std::max(g.law().demand_n(), 0.4) * (1 + g.cfg().grip_slip_step), 1e-12);
+  EXPECT_NEAR(raised, std::max(g.law().demand_n(), 0.3) * (1 + g.cfg().grip_slip_step), 1e-12);
   g.hold(0.9 * g.cfg().grip_safe_s);
   EXPECT_NEAR(g.law().target_n(), raised, 1e-12) << "held through the safe while";
   g.hold(0.2);
   EXPECT_LT(g.law().target_n(), raised) << "relaxing after it";
   g.hold(10.0);
   EXPECT_NEAR(g.law().target_n(), g.law().demand_n(), 1e-3) << "down to the demand";
+}
+
+TEST(GripLaw, AFirmGripThatSlipsStopsRelaxingWhereItIs) {
+  Grip g;
+  g.press(0.6, 0.1);  // demand 0.25 N: a raise of it (0.325 N) is under the grip
+  g.step();
+  g.step(true);
+  EXPECT_NEAR(g.law().target_n(), 0.6, 1e-12);
+  g.hold(0.9 * g.cfg().grip_safe_s);
+  EXPECT_NEAR(g.law().target_n(), 0.6, 1e-12) << "held through the safe while";
 }
 
 TEST(GripLaw, DemandIsTheLoadOverTheFrictionEstimateWithTheMargin) {
