@@ -120,7 +120,8 @@ struct Config {
   // of the lift and put it back in 20 of the seed-20 sweep's 32 normal scenarios.
   double grip_lift_n = 0.8;
   // Grip over the least grip the load and the friction estimate ask for, minus 1, in the carry
-  // (Johansson and Westling: 0.1-0.4) and in the twist (the thread's torque rises in a turn).
+  // (Johansson and Westling: 0.1-0.4) and in the twist (the thread's torque rises in a turn; 0.5
+  // let the default scenario's turns slip two cycles in a row: tight declared a cycle early).
   double grip_margin = 0.25;
   double grip_twist_margin = 2.0;
   // The friction estimate mu_hat: its start (the low end of the range it is meant for, 0.4-1.2:
@@ -135,7 +136,8 @@ struct Config {
   // load ratio, by at most grip_mu_drop: incipient slip comes at any ratio.
   double grip_mu_rise_per_s = 0.0;
   double grip_mu_drop = 0.3;
-  // A slip frame raises the target to this fraction above the grip (or the demand, the larger).
+  // A slip frame raises the target to this fraction above the grip (or the demand, the larger);
+  // a grip already past that raise of the demand stays where it is.
   double grip_slip_step = 0.3;
   // No slip for this long is a safe while: the target relaxes toward the demand with relax_s.
   double grip_safe_s = 0.5;
