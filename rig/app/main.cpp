@@ -157,6 +157,11 @@ int run(int argc, char** argv) {
          "the controller's slip detector, paper, field or learned, overriding the scenario's "
          "controller.slip_detector (docs/slip.md)")
       ->check(tactile::cli::non_empty());
+  std::string grip;
+  app.add_option("--grip", grip,
+                 "the controller's grip, paper or margin, overriding the scenario's "
+                 "controller.grip; with --sweep, every run's (docs/control.md)")
+      ->check(tactile::cli::non_empty());
   app.add_option("--detectors", sweep.detectors,
                  "sweep: run every scenario once with each of these slip detectors, separated by "
                  "commas")
@@ -179,6 +184,10 @@ int run(int argc, char** argv) {
       tactile::util::set_log_level(tactile::util::parse_log_level(log_level));
     } catch (const std::invalid_argument& e) {
       throw tactile::cli::UsageError(std::string("--log-level: ") + e.what());
+    }
+    if (!grip.empty() && !tactile::control::grip_from_string(grip)) {
+      throw tactile::cli::UsageError("--grip must be " + std::string(tactile::control::kGripNames) +
+                                     "; got '" + grip + "'");
     }
     if (*sweep_opt || *merge_opt) {
       if (sweep.out.empty())
@@ -210,6 +219,7 @@ int run(int argc, char** argv) {
                                          fmt::format("{}", fmt::join(sweep.detectors, ",")) + "'");
         }
       }
+      sweep.grip = grip;
       tactile::util::install_stop_handlers();
       tactile::rig::sweep::run_sweep(sweep);
       // Cut short by a signal: the partial table is written, and the status says it is partial.
@@ -223,6 +233,7 @@ int run(int argc, char** argv) {
     }
     tactile::rig::Scenario scenario = tactile::rig::load_scenario(scenario_path);
     if (!slip_detector.empty()) scenario.slip_detector = slip_detector;
+    if (!grip.empty()) scenario.grip = grip;
     if (!cameras.empty()) {
       if (cameras.size() != 2) {
         throw tactile::cli::UsageError("--cameras needs two addresses, left,right; got '" +

@@ -41,6 +41,25 @@ const DoubleField kDoubles[] = {
     {"recompress_max_f2_fraction", &Config::recompress_max_f2_fraction},
     {"backoff_speed_mps", &Config::backoff_speed_mps},
     {"max_finger_speed_mps", &Config::max_finger_speed_mps},
+    {"grip_touch_n", &Config::grip_touch_n},
+    {"grip_min_n", &Config::grip_min_n},
+    {"grip_lift_n", &Config::grip_lift_n},
+    {"grip_margin", &Config::grip_margin},
+    {"grip_twist_margin", &Config::grip_twist_margin},
+    {"grip_mu_initial", &Config::grip_mu_initial},
+    {"grip_mu_min", &Config::grip_mu_min},
+    {"grip_mu_max", &Config::grip_mu_max},
+    {"grip_mu_rise_per_s", &Config::grip_mu_rise_per_s},
+    {"grip_mu_drop", &Config::grip_mu_drop},
+    {"grip_slip_step", &Config::grip_slip_step},
+    {"grip_safe_s", &Config::grip_safe_s},
+    {"grip_relax_s", &Config::grip_relax_s},
+    {"grip_load_window_s", &Config::grip_load_window_s},
+    {"grip_servo_gain_mps_per_n", &Config::grip_servo_gain_mps_per_n},
+    {"grip_servo_max_speed_mps", &Config::grip_servo_max_speed_mps},
+    {"grip_force_rate_nps", &Config::grip_force_rate_nps},
+    {"grip_ff_accel_mps2", &Config::grip_ff_accel_mps2},
+    {"grip_ff_lead_s", &Config::grip_ff_lead_s},
     {"cap_x_m", &Config::cap_x_m},
     {"cap_y_m", &Config::cap_y_m},
     {"bottle_x_m", &Config::bottle_x_m},
@@ -83,7 +102,7 @@ const CountField kCounts[] = {
 }  // namespace
 
 std::vector<std::string> controller_config_keys() {
-  std::vector<std::string> keys{"task", "slip_detector"};
+  std::vector<std::string> keys{"task", "slip_detector", "grip"};
   for (const auto& f : kDoubles)
     keys.emplace_back(f.name);
   keys.emplace_back("twist_angle_deg");
@@ -138,6 +157,11 @@ control::Config parse_controller_config(const Node& section) {
     const auto kind = control::slip_detector_from_string(n->as_string());
     if (!kind) n->fail(std::string("must be ") + control::kSlipDetectorNames + ", is " + n->text());
     cfg.slip_detector = *kind;
+  }
+  if (auto n = section.find("grip")) {
+    const auto kind = control::grip_from_string(n->as_string());
+    if (!kind) n->fail(std::string("must be ") + control::kGripNames + ", is " + n->text());
+    cfg.grip = *kind;
   }
   for (const auto& f : kDoubles) {
     if (auto n = section.find(f.name)) cfg.*(f.member) = n->as_double();

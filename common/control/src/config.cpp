@@ -36,8 +36,17 @@ const char* to_string(GripKind k) {
   switch (k) {
     case GripKind::kPaper:
       return "paper";
+    case GripKind::kMargin:
+      return "margin";
   }
   return "?";
+}
+
+std::optional<GripKind> grip_from_string(std::string_view name) {
+  for (auto k : {GripKind::kPaper, GripKind::kMargin}) {
+    if (name == to_string(k)) return k;
+  }
+  return std::nullopt;
 }
 
 std::string describe_controller(const Config& c) {
@@ -77,6 +86,43 @@ void at_most(const char* field, double v, const char* bound_name, double bound) 
     const std::string rule = std::string("must be <= ") + bound_name;
     fail(field, v, rule.c_str());
   }
+}
+
+// The margin grip's parameters (checked whichever grip runs: a bad value is a bad file).
+void validate_margin_grip(const Config& c) {
+  positive("grip_touch_n", c.grip_touch_n);
+  at_most("grip_touch_n", c.grip_touch_n, "f1_n", c.f1_n);
+  positive("grip_min_n", c.grip_min_n);
+  positive("grip_lift_n", c.grip_lift_n);
+  if (c.grip_lift_n < c.grip_min_n) fail("grip_lift_n", c.grip_lift_n, "must be >= grip_min_n");
+  if (!(c.grip_min_n > c.grip_touch_n)) fail("grip_min_n", c.grip_min_n, "must be > grip_touch_n");
+  non_negative("grip_margin", c.grip_margin);
+  at_most("grip_margin", c.grip_margin, "2", 2.0);
+  non_negative("grip_twist_margin", c.grip_twist_margin);
+  at_most("grip_twist_margin", c.grip_twist_margin, "4", 4.0);
+  positive("grip_mu_min", c.grip_mu_min);
+  positive("grip_mu_max", c.grip_mu_max);
+  if (!(c.grip_mu_max >= c.grip_mu_min))
+    fail("grip_mu_max", c.grip_mu_max, "must be >= grip_mu_min");
+  positive("grip_mu_initial", c.grip_mu_initial);
+  if (c.grip_mu_initial < c.grip_mu_min || c.grip_mu_initial > c.grip_mu_max) {
+    fail("grip_mu_initial", c.grip_mu_initial, "must lie in [grip_mu_min, grip_mu_max]");
+  }
+  non_negative("grip_mu_rise_per_s", c.grip_mu_rise_per_s);
+  positive("grip_mu_drop", c.grip_mu_drop);
+  if (!(c.grip_mu_drop < 1.0)) fail("grip_mu_drop", c.grip_mu_drop, "must be < 1");
+  positive("grip_slip_step", c.grip_slip_step);
+  at_most("grip_slip_step", c.grip_slip_step, "2", 2.0);
+  non_negative("grip_safe_s", c.grip_safe_s);
+  positive("grip_relax_s", c.grip_relax_s);
+  positive("grip_load_window_s", c.grip_load_window_s);
+  positive("grip_servo_gain_mps_per_n", c.grip_servo_gain_mps_per_n);
+  positive("grip_servo_max_speed_mps", c.grip_servo_max_speed_mps);
+  at_most("grip_servo_max_speed_mps", c.grip_servo_max_speed_mps, "max_finger_speed_mps",
+          c.max_finger_speed_mps);
+  positive("grip_force_rate_nps", c.grip_force_rate_nps);
+  non_negative("grip_ff_accel_mps2", c.grip_ff_accel_mps2);
+  non_negative("grip_ff_lead_s", c.grip_ff_lead_s);
 }
 
 }  // namespace
@@ -126,6 +172,15 @@ void Config::validate() const {
   non_negative("field_arm_yaw_rate_rps", field_arm_yaw_rate_rps);
   positive("load_transfer_n", load_transfer_n);
   positive("lift_confirm_s", lift_confirm_s);
+
+  switch (grip) {
+    case GripKind::kPaper:
+    case GripKind::kMargin:
+      break;
+    default:
+      fail("grip", static_cast<int>(grip), "unknown grip");
+  }
+  validate_margin_grip(*this);
 
   positive("max_finger_speed_mps", max_finger_speed_mps);
   positive("approach_speed_mps", approach_speed_mps);

@@ -79,6 +79,20 @@ void GraspMoveTwistController::event(EventList& events, EventKind kind, const ch
   events.push(e);
 }
 
+GripContext GraspMoveTwistController::grip_context(const ArmFeedback& arm) const noexcept {
+  GripContext c;
+  const double lead_s = cfg_.grip_ff_lead_s;
+  if (stage_ == Stage::kPhaseOne) {
+    c.carrying = phase_ == Phase::kLift || phase_ == Phase::kTransport;
+    c.lifting = phase_ == Phase::kGrasp || phase_ == Phase::kLift;
+    c.accelerates_soon = one_.accelerates_within(arm, task_s_, lead_s);
+  } else if (stage_ == Stage::kPhaseTwo) {
+    c.twist = true;
+    c.accelerates_soon = two_.accelerates_within(arm, task_s_, lead_s);
+  }
+  return c;
+}
+
 void GraspMoveTwistController::end(EventKind kind, const char* text, StepOutput& out) noexcept {
   event(out.events, kind, text);
   stage_ = Stage::kEnded;
@@ -199,7 +213,8 @@ ControllerOutput GraspMoveTwistController::update(const ControllerInput& in) noe
     sent_velocity_ = {};
   }
 
-  const FingerSpeedOutput v = speed_.update(mode_, out.flags, in.fingertips, task_s_);
+  const FingerSpeedOutput v =
+      speed_.update(mode_, out.flags, in.fingertips, task_s_, grip_context(in.arm));
   for (std::size_t f = 0; f < kFingertips; ++f) {
     const FingertipFlags& ff = out.flags.fingertip[f];
     const auto tip = static_cast<std::int8_t>(f);

@@ -45,7 +45,9 @@ FingerSpeedEstimator::FingerSpeedEstimator(const Config& cfg)
       recompress_duration_(cfg.recompress_duration_s),
       recompress_limit_n_(cfg.recompress_max_f2_fraction * cfg.f2_n),
       backoff_speed_(cfg.backoff_speed_mps),
-      max_speed_(cfg.max_finger_speed_mps) {
+      max_speed_(cfg.max_finger_speed_mps),
+      margin_(cfg.grip == GripKind::kMargin),
+      grip_(cfg) {
   reset();
 }
 
@@ -53,12 +55,27 @@ void FingerSpeedEstimator::reset() noexcept {
   velocity_.fill(kZero);
   action_.fill(FingerAction::kIdle);
   recompress_until_.fill(kNever);
+  grip_.reset();
+}
+
+FingerAction FingerSpeedEstimator::margin_move(std::size_t f, const GripOutput& g, double now_s,
+                                               Vec3& v) noexcept {
+  v = g.squeeze_mps * kSqueeze;
+  if (g.raised[f]) {
+    recompress_until_[f] = now_s + recompress_duration_;
+    return FingerAction::kRecompress;
+  }
+  const bool recompressing = action_[f] == FingerAction::kRecompress;
+  return recompressing && now_s < recompress_until_[f] ? FingerAction::kRecompress
+                                                       : FingerAction::kHold;
 }
 
 FingerSpeedOutput FingerSpeedEstimator::update(
     FingerMode mode, const Flags& flags, const std::array<FingertipInput, kFingertips>& inputs,
-    double now_s) noexcept {
+    double now_s, const GripContext& grip) noexcept {
   if (mode != mode_) {
+    // The margin grip's target belongs to one grasp: a search starts another.
+    if (mode != FingerMode::kMove) grip_.reset();
     // A new mode starts from rest: a new search has touched nothing yet, and a re-compression
     // does not outlive the step that started it.
     mode_ = mode;
@@ -70,6 +87,8 @@ FingerSpeedOutput FingerSpeedEstimator::update(
   }
 
   FingerSpeedOutput out;
+  GripOutput g;
+  if (margin_ && mode == FingerMode::kMove) g = grip_.update(flags, inputs, grip, now_s);
   for (std::size_t f = 0; f < kFingertips; ++f) {
     const FingertipFlags& ff = flags.fingertip[f];
     const FingerAction before = action_[f];
@@ -92,6 +111,10 @@ FingerSpeedOutput FingerSpeedEstimator::update(
         v = approach_speed_ * kSqueeze;
         action = FingerAction::kApproach;
       }
+    } else if (margin_) {
+      action = margin_move(f, g, now_s, v);
+      out.recompress_started[f] =
+          action == FingerAction::kRecompress && g.raised[f] && before != FingerAction::kRecompress;
     } else if ((ff.slip || before == FingerAction::kRecompress) &&
                ff.max_fz_n >= recompress_limit_n_) {
       // No headroom left under F2: squeezing on would only trip OVER. Hold the grip.

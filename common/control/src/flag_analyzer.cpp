@@ -13,7 +13,7 @@ namespace {
 // element i of a fresh frame.
 template <typename Slips>
 FingertipFlags analyze_with(const FingertipInput& in, double f1_n, double f2_n,
-                            Slips slips) noexcept {
+                            double touch_total_n, Slips slips) noexcept {
   FingertipFlags f;
   double best_fz = -std::numeric_limits<double>::infinity();
   double best_slip_fz = best_fz;
@@ -27,6 +27,7 @@ FingertipFlags analyze_with(const FingertipInput& in, double f1_n, double f2_n,
     const auto index = static_cast<std::int32_t>(i);
     if (r.fz > f1_n) f.touch = true;
     if (r.fz > f2_n) f.over = true;
+    f.total_fz_n += r.fz;
     if (r.fz > best_fz) {
       best_fz = r.fz;
       f.max_fz_index = index;
@@ -46,8 +47,9 @@ FingertipFlags analyze_with(const FingertipInput& in, double f1_n, double f2_n,
     }
   }
   if (f.max_fz_index != kNoElement) f.max_fz_n = best_fz;
+  if (!std::isfinite(f.total_fz_n)) f.total_fz_n = 0;
   // The paper's TOUCH: a slipping element touches even below F1.
-  f.touch = f.touch || f.slip;
+  f.touch = f.touch || f.slip || f.total_fz_n > touch_total_n;
   return f;
 }
 
@@ -55,13 +57,13 @@ FingertipFlags analyze_with(const FingertipInput& in, double f1_n, double f2_n,
 
 FingertipFlags FlagAnalyzer::analyze(const FingertipInput& in, bool twist_phase) const noexcept {
   const double threshold = dr(twist_phase);
-  return analyze_with(in, f1_n_, f2_n_,
+  return analyze_with(in, f1_n_, f2_n_, touch_total_n_,
                       [&](std::size_t i) { return paper_slip(in.elements[i], threshold); });
 }
 
 FingertipFlags FlagAnalyzer::analyze(const FingertipInput& in,
                                      const FingertipSlip& slip) const noexcept {
-  return analyze_with(in, f1_n_, f2_n_, [&](std::size_t i) {
+  return analyze_with(in, f1_n_, f2_n_, touch_total_n_, [&](std::size_t i) {
     return i < kMaxSlipElements && slipping(slip.state[i]);
   });
 }

@@ -1,5 +1,8 @@
 #include "tactile/control/sequencer.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace tactile::control {
 
 void Sequencer::clear() noexcept {
@@ -76,6 +79,18 @@ FingerMode Sequencer::finger_mode() const {
   const FingerMode grasping = grasp_.finger_mode();
   if (grasping != FingerMode::kOff) return grasping;
   return segment_.carries_object() ? FingerMode::kMove : FingerMode::kOff;
+}
+
+bool Sequencer::accelerates_within(const ArmFeedback& arm, double t, double lead_s) const noexcept {
+  if (grasp_.finger_mode() == FingerMode::kMove) return true;
+  if (!segment_.carries_object()) return false;
+  if (t - segment_.started_s() < lead_s) return true;
+  const MoveTo& m = segment_.move();
+  const double distance_m = norm(m.target.position_m - arm.wrist.position_m);
+  const double turn_rad = std::abs(m.target.yaw_rad - arm.wrist.yaw_rad);
+  const double left_s = std::max(distance_m / m.max_speed_mps, turn_rad / m.max_yaw_rate_rps);
+  // A pose that is not finite says nothing of the time left: more grip, not less.
+  return !(left_s > lead_s);
 }
 
 Command Sequencer::resume(SegmentIds& ids, double t) noexcept {

@@ -27,6 +27,14 @@ control::Config scenario_controller_config(const Scenario& sc) {
     }
     cfg.slip_detector = *kind;
   }
+  if (!sc.grip.empty()) {
+    const auto kind = control::grip_from_string(sc.grip);
+    if (!kind) {
+      throw std::invalid_argument(sc.source + ": controller.grip = " + sc.grip + ": must be " +
+                                  control::kGripNames);
+    }
+    cfg.grip = *kind;
+  }
   cfg.validate();
   return cfg;
 }

@@ -613,6 +613,7 @@ std::string hand_controller_yaml(const Scenario& sc) {
   num("bottle_y_m", cfg.bottle_y_m);
   o += fmt::format("  tighten_clockwise: {}\n", cfg.tighten_clockwise ? "true" : "false");
   o += fmt::format("  slip_detector: {}\n", control::to_string(cfg.slip_detector));
+  o += fmt::format("  grip: {}\n", control::to_string(cfg.grip));
   bool stale_set = false;
   for (const auto& [key, v] : sc.controller) {
     num(key.c_str(), v);

@@ -275,19 +275,26 @@ void parse_disturbance(const Node& dist, Scenario& s) {
   }
 }
 
+// A named choice of the control core (slip_detector, grip), refused unless `parse` knows it.
+template <typename Parse>
+std::string choice(const Node& n, Parse parse, const char* names) {
+  if (!parse(n.as_string())) n.fail(std::string("must be ") + names + ", is " + n.text());
+  return n.as_string();
+}
+
 // Overrides of the controller's settings, by the names of controller_keys().
 void parse_controller(const Node& ctl, Scenario& s) {
   if (!ctl.is_map()) ctl.fail("must be a mapping of controller settings");
   ctl.refuse_unknown_keys(controller_keys());
   for (const std::string& key : ctl.keys()) {
     if (key == "slip_detector") {
-      const Node n = ctl[key];
-      if (!control::slip_detector_from_string(n.as_string()))
-        n.fail(std::string("must be ") + control::kSlipDetectorNames + ", is " + n.text());
-      s.slip_detector = n.as_string();
-      continue;
+      s.slip_detector =
+          choice(ctl[key], control::slip_detector_from_string, control::kSlipDetectorNames);
+    } else if (key == "grip") {
+      s.grip = choice(ctl[key], control::grip_from_string, control::kGripNames);
+    } else {
+      s.controller.emplace_back(key, checked(ctl[key], -1e6, 1e6));
     }
-    s.controller.emplace_back(key, checked(ctl[key], -1e6, 1e6));
   }
 }
 

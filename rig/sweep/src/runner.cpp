@@ -65,13 +65,15 @@ struct Job {
   std::string detector;
 };
 
-// Starts PROGRAM --lockstep --scenario FILE --report FILE --slip-detector NAME in its own
-// process group (a Ctrl-C at the terminal reaches the sweep alone, which stops its children),
+// Starts PROGRAM --lockstep --scenario FILE --report FILE --slip-detector NAME [--grip G] in its
+// own process group (a Ctrl-C at the terminal reaches the sweep alone, which stops its children),
 // stdout to /dev/null, stderr to the scenario's log. Throws when it cannot start.
-util::Process spawn_child(const std::string& program, const Paths& p, const std::string& detector) {
+util::Process spawn_child(const std::string& program, const Paths& p, const std::string& detector,
+                          const std::string& grip) {
   util::ProcessOptions o;
   o.argv = {program,    "--lockstep",      "--scenario",      p.scenario.string(),
             "--report", p.report.string(), "--slip-detector", detector};
+  if (!grip.empty()) o.argv.insert(o.argv.end(), {"--grip", grip});
   o.stdout_to = util::Redirect::null();
   o.stderr_to = util::Redirect::file(p.log);
   o.own_process_group = true;
@@ -197,7 +199,7 @@ std::size_t run_sweep(const SweepOptions& o) {
       const std::uint64_t i = job.index;
       try {
         running.push_back({job, spawn_child(program, paths_of(o.out, i, o.scenarios, job.detector),
-                                            job.detector)});
+                                            job.detector, o.grip)});
       } catch (const std::exception& e) {
         // 127: the shell's "cannot run"
         rows.push_back(failed_row(draws[i], job.detector, 127, e.what()));

@@ -277,13 +277,18 @@ TEST_F(MisspeltKey, RigInLockstepNamesItsSlipDetectorAndGrip) {
   text << in.rdbuf();
   write("scenario.yaml", text.str() + "sim: {max_time_s: 0.2}\n");
   const fs::path report = dir_ / "report.json";
-  const ProcessResult r =
-      start({TACTILE_RIG_PATH, "--lockstep", "--scenario", (dir_ / "scenario.yaml").string(),
-             "--slip-detector", "field", "--report", report.string()});
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.err.find("scenario.yaml (lockstep): slip detector: field, grip: paper\n"),
-            std::string::npos)
-      << r.err;
+  // A run that ends well and names its controller in its first line.
+  const auto names = [&](const std::vector<std::string>& options, const std::string& controller) {
+    std::vector<std::string> argv{TACTILE_RIG_PATH, "--lockstep",
+                                  "--scenario",     (dir_ / "scenario.yaml").string(),
+                                  "--report",       report.string()};
+    argv.insert(argv.end(), options.begin(), options.end());
+    const ProcessResult r = start(argv);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("scenario.yaml (lockstep): " + controller + "\n"), std::string::npos)
+        << r.err;
+  };
+  names({"--slip-detector", "field"}, "slip detector: field, grip: paper");
   std::ifstream json(report);
   std::stringstream written;
   written << json.rdbuf();
@@ -292,6 +297,13 @@ TEST_F(MisspeltKey, RigInLockstepNamesItsSlipDetectorAndGrip) {
                                "\"grip\": \"paper\"\n  },\n"),
             std::string::npos)
       << written.str();
+  // --grip overrides the scenario's grip; a grip it does not know is a usage error.
+  names({"--grip", "margin"}, "slip detector: learned, grip: margin");
+  const ProcessResult firm = start({TACTILE_RIG_PATH, "--lockstep", "--scenario",
+                                    (dir_ / "scenario.yaml").string(), "--grip", "firm"});
+  EXPECT_EQ(firm.exit_code, 2) << firm.err;
+  EXPECT_NE(firm.err.find("--grip must be paper or margin; got 'firm'"), std::string::npos)
+      << firm.err;
 }
 
 // An empty value on the command line is never taken for "not given": it clears the file's value
@@ -336,6 +348,7 @@ TEST_F(MisspeltKey, AnEmptyValueThatMeansNothingIsAUsageError) {
         "--publish", ""}},
       {"--slip-detector",
        {TACTILE_RIG_PATH, "--lockstep", "--scenario", scenario, "--slip-detector", ""}},
+      {"--grip", {TACTILE_RIG_PATH, "--lockstep", "--scenario", scenario, "--grip", ""}},
       {"--cameras", {TACTILE_RIG_PATH, "--scenario", scenario, "--cameras", ""}},
   };
   for (const auto& [option, argv] : cases) {

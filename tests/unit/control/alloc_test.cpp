@@ -86,6 +86,13 @@ TEST(Allocation, UpdateWithTheLearnedDetectorAllocatesNothing) {
   expect_no_allocation(cfg);
 }
 
+TEST(Allocation, UpdateWithTheMarginGripAllocatesNothing) {
+  // The margin grip's servo, friction estimate and feed-forward run on every MOVE update.
+  Config cfg = testing::paper_config();
+  cfg.grip = GripKind::kMargin;
+  expect_no_allocation(cfg);
+}
+
 TEST(Allocation, CounterSeesAllocations) {
   // The counter itself works: otherwise the test above proves nothing.
   tactile::testing::AllocationScope scope;

@@ -74,6 +74,18 @@ TEST_F(HandConfigFile, SlipDetectorDefaultsToTheLearnedCombinerAndIsRead) {
   EXPECT_DOUBLE_EQ(field.field_edge_ratio, 0.6);
 }
 
+// The grip is the paper's unless the configuration names the margin grip, whose parameters it
+// reads beside it.
+TEST_F(HandConfigFile, GripDefaultsToThePapersAndIsRead) {
+  std::vector<std::string> warnings;
+  EXPECT_EQ(load_hand_config(write(""), &warnings).controller.grip, control::GripKind::kPaper);
+  const auto margin =
+      load_hand_config(write("controller:\n  grip: margin\n  grip_margin: 0.3\n"), &warnings)
+          .controller;
+  EXPECT_EQ(margin.grip, control::GripKind::kMargin);
+  EXPECT_DOUBLE_EQ(margin.grip_margin, 0.3);
+}
+
 TEST_F(HandConfigFile, StartAfterFramesDefaultsTo20AndIsRead) {
   std::vector<std::string> warnings;
   EXPECT_EQ(load_hand_config(write(""), &warnings).start_after_frames, 20);
@@ -137,6 +149,8 @@ TEST_F(HandConfigFile, AMisspeltKeyIsRefusedAtItsLineWithTheClosestKey) {
           ":7: unknown key 'twist_dr_facter' in 'controller' (did you mean 'twist_dr_factor'?)");
   refused("controller:\n  slip_detector: fields\n",
           ":6: key 'controller.slip_detector': must be paper, field or learned, is 'fields'");
+  refused("controller:\n  grip: firm\n",
+          ":6: key 'controller.grip': must be paper or margin, is 'firm'");
 }
 
 TEST_F(HandConfigFile, BadRealtimeNamesFileKeyAndValue) {

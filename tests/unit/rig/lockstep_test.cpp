@@ -135,6 +135,33 @@ TEST(Lockstep, NoDisturbanceNoKey) {
   EXPECT_FALSE(j.contains("fragile"));
 }
 
+// The margin grip (docs/control.md, "The margin grip") on the same scenario: the whole task
+// still completes (grasp on the lift, release at the bottle, tight in the true cycle), with no
+// drop and no OVER, and the cap is held closer to the least grip that holds than by the paper's.
+TEST(Lockstep, DefaultScenarioWithTheMarginGripHoldsWithLessGrip) {
+  LockstepOptions o;
+  o.record_series = false;
+  Scenario paper = load_scenario(kDir / "default.yaml");
+  paper.grip = "paper";
+  Scenario margin = load_scenario(kDir / "default.yaml");
+  margin.grip = "margin";
+  const Report p = run_lockstep(paper, o).report;
+  const Report m = run_lockstep(margin, o).report;
+  EXPECT_EQ(m.controller.grip, "margin");
+  EXPECT_EQ(p.controller.grip, "paper");
+  EXPECT_TRUE(m.completed) << m.end_reason;
+  EXPECT_FALSE(m.dropped);
+  EXPECT_EQ(m.over_events, 0);
+  EXPECT_EQ(m.grasp_classified, std::optional<std::string>("grasp"));
+  EXPECT_EQ(m.release_classified, std::optional<std::string>("release"));
+  ASSERT_TRUE(m.tightened_cycle.has_value());
+  EXPECT_EQ(m.tightened_cycle, m.true_tight_cycle);
+  ASSERT_GT(m.grip.held_frames, 100U);
+  EXPECT_GT(m.grip.ratio_p50, 1.0) << "no frame is held with less than the least that holds";
+  EXPECT_LT(m.grip.ratio_p50, p.grip.ratio_p50);
+  EXPECT_LT(m.grip.cap_slide_carry_mm, 1.0);
+}
+
 // A cap held to the table (the seed-20 sweep's scenario 7) rises off it by the anchor's stretch
 // for a few frames under the grip: the anchor holds it, not the fingers, so no frame is held and
 // the grip's ratios are null.

@@ -236,7 +236,8 @@ TEST(Scenario, TakesEveryControllerKeyButThoseItsWorldDecides) {
   const std::set<std::string> world{"task",       "gravity_axis", "cap_x_m",          "cap_y_m",
                                     "bottle_x_m", "bottle_y_m",   "tighten_clockwise"};
   for (const std::string& key : config::controller_config_keys()) {
-    if (key == "slip_detector") continue;  // a name, not a number: ControllerOverridesAreKept
+    // Names, not numbers: ControllerOverridesAreKept, ControllerGripIsANameItKnows.
+    if (key == "slip_detector" || key == "grip") continue;
     if (world.contains(key)) {
       EXPECT_NE(error_of(kMinimal + "controller: {" + key + ": 1}\n").find("unknown key"),
                 std::string::npos)
@@ -249,6 +250,14 @@ TEST(Scenario, TakesEveryControllerKeyButThoseItsWorldDecides) {
     control::Config cfg;
     EXPECT_TRUE(config::set_controller_field(cfg, key, 1.0)) << key;
   }
+}
+
+TEST(Scenario, ControllerGripIsANameItKnows) {
+  EXPECT_EQ(parse_scenario(kMinimal + "controller: {grip: margin}\n", "s.yaml").grip, "margin");
+  EXPECT_EQ(parse_scenario(kMinimal, "s.yaml").grip, "");
+  const std::string e = error_of(kMinimal + "controller: {grip: firm}\n");
+  EXPECT_NE(e.find("controller.grip"), std::string::npos) << e;
+  EXPECT_NE(e.find("paper or margin"), std::string::npos) << e;
 }
 
 }  // namespace

@@ -33,10 +33,14 @@ std::optional<SlipDetectorKind> slip_detector_from_string(std::string_view name)
 // The names slip_detector_from_string accepts, for error messages.
 inline constexpr const char* kSlipDetectorNames = "paper, field or learned";
 
-// Which grip the controller keeps: today only the paper's (close to F1, re-compress on SLIP, back
-// off on OVER; docs/control.md). Every run names it beside the slip detector.
-enum class GripKind : std::uint8_t { kPaper };
+// Which grip the controller keeps (docs/control.md): the paper's (close to F1, re-compress on
+// SLIP, back off on OVER) or the margin grip (close to a light contact, then a force servo on the
+// least grip that holds with a margin, GripLaw). Every run names it beside the slip detector.
+enum class GripKind : std::uint8_t { kPaper, kMargin };
 const char* to_string(GripKind k);
+std::optional<GripKind> grip_from_string(std::string_view name);
+// The names grip_from_string accepts, for error messages.
+inline constexpr const char* kGripNames = "paper or margin";
 
 struct Config {
   Task task = Task::kGraspMoveTwist;
@@ -59,7 +63,8 @@ struct Config {
   // the sweep (docs/slip.md, "Results"); kPaper is the paper's rule (an element slips when its
   // centroid moves more than dr in a frame) and reproduces the paper's experiment.
   SlipDetectorKind slip_detector = SlipDetectorKind::kLearned;
-  // The grip: the paper's, the only one so far (no configuration key yet).
+  // The grip (key `grip`): kPaper reproduces the paper; kMargin is the margin grip (GripLaw, its
+  // parameters below).
   GripKind grip = GripKind::kPaper;
   // The field detector's parameters (docs/slip.md). An element moving more than dr counts as
   // slipping only when loaded beyond this fraction of the friction estimate (Cattaneo-Mindlin
@@ -103,6 +108,52 @@ struct Config {
   double recompress_max_f2_fraction = 0.9;
   double backoff_speed_mps = 0.001;    // OVER: speed away from the object along -z_f
   double max_finger_speed_mps = 0.01;  // bound on every fingertip velocity's magnitude
+
+  // --- the margin grip (grip: margin; docs/control.md, "The margin grip") --------------------
+  // TOUCH: a fingertip whose total F_z (the sum over its in-contact elements) exceeds this. Well
+  // under F1 and far above the sensor's force noise (about 0.003 N per element in the rig).
+  double grip_touch_n = 0.05;
+  // The least target (N per fingertip): the fingertips stay on the object, above the touch.
+  double grip_min_n = 0.1;
+  // The least target from the grasp to the lift's end (N per fingertip), before the lift has
+  // weighed the object: with grip_min_n alone the learned detector saw the cap slip through most
+  // of the lift and put it back in 20 of the seed-20 sweep's 32 normal scenarios.
+  double grip_lift_n = 0.8;
+  // Grip over the least grip the load and the friction estimate ask for, minus 1, in the carry
+  // (Johansson and Westling: 0.1-0.4) and in the twist (the thread's torque rises in a turn; 0.5
+  // let the default scenario's turns slip two cycles in a row: tight declared a cycle early).
+  double grip_margin = 0.25;
+  double grip_twist_margin = 2.0;
+  // The friction estimate mu_hat: its start (the low end of the range it is meant for, 0.4-1.2:
+  // too much grip at first, not too little) and its bounds.
+  double grip_mu_initial = 0.5;
+  double grip_mu_min = 0.2;
+  double grip_mu_max = 1.2;
+  // After grip_safe_s without slip mu_hat rises by this fraction per second (the next slip says
+  // how far is too far). 0: no probing. A probe needs a detector that sees a steady slide: with
+  // the paper's rule the default cap slid out of the fingers at mu_hat 1.2 (true mu_s 0.8)
+  // without one SLIP. A burst of slips (each within grip_safe_s of the last) lowers it to their
+  // load ratio, by at most grip_mu_drop: incipient slip comes at any ratio.
+  double grip_mu_rise_per_s = 0.0;
+  double grip_mu_drop = 0.3;
+  // A slip frame raises the target to this fraction above the grip (or the demand, the larger);
+  // a grip already past that raise of the demand stays where it is.
+  double grip_slip_step = 0.3;
+  // No slip for this long is a safe while: the target relaxes toward the demand with relax_s.
+  double grip_safe_s = 0.5;
+  double grip_relax_s = 1.0;
+  // A fingertip's tangential load is held this long (the arm's vibration, 5 Hz and up, passes
+  // through its peak within it); also the weight estimate's time constant.
+  double grip_load_window_s = 0.2;
+  // The force servo: squeeze speed per newton of error, its bound, and the rate at which the
+  // servo's reference follows the target.
+  double grip_servo_gain_mps_per_n = 0.02;
+  double grip_servo_max_speed_mps = 0.005;
+  double grip_force_rate_nps = 20.0;
+  // Feed-forward: the arm's planned acceleration (the rig's arm.max_accel_mps2 default) and how
+  // long before a segment's start or stop the grip rises for it.
+  double grip_ff_accel_mps2 = 0.5;
+  double grip_ff_lead_s = 0.3;
 
   // --- places (world frame, m) -------------------------------------------------------------
   double cap_x_m = 0.35;

@@ -48,6 +48,8 @@ class GraspMoveTwistController {
              std::int8_t fingertip = kNoFingertip, double value = 0,
              std::optional<std::uint32_t> element = std::nullopt) const;
   Phase current_phase() const;
+  // What the sequencers say of the next moments, for the margin grip.
+  GripContext grip_context(const ArmFeedback& arm) const noexcept;
 
   Config cfg_;
   FlagAnalyzer flags_;

@@ -13,10 +13,15 @@
 //            instead (no headroom left: squeezing on would only trip OVER).
 //   OVER     in any driven mode, and before everything else: stop squeezing and back off along
 //            -z_f at backoff_speed until the fingertip is under F2 again.
+//
+// With grip: margin, kMove is the margin grip's force servo instead (GripLaw): both fingertips
+// squeeze along z_f at its speed; a slip that raises its target is a re-compression.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 
 #include "tactile/control/config.hpp"
+#include "tactile/control/grip_law.hpp"
 #include "tactile/control/types.hpp"
 
 namespace tactile::control {
@@ -37,16 +42,18 @@ class FingerSpeedEstimator {
  public:
   explicit FingerSpeedEstimator(const Config& cfg);
 
-  // `inputs` supplies the normals; `now_s` is the controller's task time.
+  // `inputs` supplies the normals; `now_s` is the controller's task time; `grip` what the
+  // sequencers say of the next moments (the margin grip's feed-forward).
   FingerSpeedOutput update(FingerMode mode, const Flags& flags,
-                           const std::array<FingertipInput, kFingertips>& inputs,
-                           double now_s) noexcept;
+                           const std::array<FingertipInput, kFingertips>& inputs, double now_s,
+                           const GripContext& grip = {}) noexcept;
 
   // The arm stopped the fingers (Hold, Open, Stop, or a MoveTo that does not keep them): the
   // current velocity is 0 and any re-compression is over.
   void reset() noexcept;
 
   const std::array<Vec3, kFingertips>& velocity() const { return velocity_; }
+  const GripLaw& grip_law() const { return grip_; }
 
  private:
   double approach_speed_;
@@ -55,6 +62,8 @@ class FingerSpeedEstimator {
   double recompress_limit_n_;  // recompress_max_f2_fraction * F2
   double backoff_speed_;
   double max_speed_;
+  bool margin_;  // grip: margin
+  GripLaw grip_;
 
   FingerMode mode_ = FingerMode::kOff;
   std::array<Vec3, kFingertips> velocity_{};
@@ -62,6 +71,9 @@ class FingerSpeedEstimator {
   std::array<bool, kFingertips> touched_{};
   std::array<double, kFingertips> recompress_until_{};
   std::array<bool, kFingertips> over_{};  // OVER in the previous update, for its rising edge
+
+  // The margin grip's MOVE for fingertip f: the servo's squeeze; a raise on slip re-compresses.
+  FingerAction margin_move(std::size_t f, const GripOutput& g, double now_s, Vec3& v) noexcept;
 };
 
 // The velocity scaled down, if needed, to at most max_speed in magnitude; 0 when not finite.

@@ -30,6 +30,10 @@ class PhaseOneSequencer {
   Command resume(SegmentIds& ids, double t) noexcept;
 
   Phase phase() const { return seq_.phase(); }
+  // The margin grip's feed-forward: Sequencer::accelerates_within.
+  bool accelerates_within(const ArmFeedback& arm, double t, double lead_s) const noexcept {
+    return seq_.accelerates_within(arm, t, lead_s);
+  }
   // RETRACT completed after a release: Phase I is over.
   bool finished() const { return seq_.phase() == Phase::kDone; }
   // Where the cap was let go (the wrist when the release's open completed): Phase II's

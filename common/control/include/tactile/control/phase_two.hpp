@@ -34,6 +34,10 @@ class PhaseTwoSequencer {
   Command resume(SegmentIds& ids, double t) noexcept { return seq_.resume(ids, t); }
 
   Phase phase() const { return seq_.phase(); }
+  // The margin grip's feed-forward: Sequencer::accelerates_within.
+  bool accelerates_within(const ArmFeedback& arm, double t, double lead_s) const noexcept {
+    return seq_.accelerates_within(arm, t, lead_s);
+  }
   bool finished() const { return seq_.phase() == Phase::kDone; }
   std::uint32_t cycle() const { return seq_.cycle(); }
   // The cycle in which tightness was detected (0: not detected).

@@ -46,6 +46,8 @@ class SegmentRunner {
   // answer its slips on the way.
   bool carries_object() const { return active_ && move_.keep_finger_velocities; }
   const MoveTo& move() const { return move_; }
+  // When the segment was issued (a resume keeps it, as it keeps the timeout).
+  double started_s() const { return started_s_; }
 
  private:
   double timeout_s_;

@@ -74,6 +74,11 @@ class Sequencer {
   // open for the distance it had left, or the unfinished segment under a new id; kNone otherwise.
   Command resume(SegmentIds& ids, double t) noexcept;
 
+  // The arm's own planned acceleration is at most lead_s away (the margin grip's feed-forward):
+  // the grasp settles (a segment that carries the object follows), or a carrying segment started
+  // less than lead_s ago or has less than lead_s left at its speeds.
+  bool accelerates_within(const ArmFeedback& arm, double t, double lead_s) const noexcept;
+
   Phase phase() const { return phase_; }
   std::uint32_t cycle() const { return cycle_; }
 

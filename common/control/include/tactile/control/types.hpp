@@ -211,9 +211,10 @@ inline constexpr std::size_t kMaxSlipElements = 64;
 // What the flag analyzer found on one fingertip. Element indices are positions in
 // FingertipInput::elements (kNoElement when there is none).
 struct FingertipFlags {
-  bool touch = false;  // some F_z > F1, or SLIP
-  bool slip = false;   // a fresh frame with an in-contact element moving more than dr
-  bool over = false;   // some F_z > F2
+  // Some F_z > F1, or SLIP; with the margin grip also a total F_z > grip_touch_n.
+  bool touch = false;
+  bool slip = false;  // a fresh frame with an in-contact element moving more than dr
+  bool over = false;  // some F_z > F2
   std::int32_t max_fz_index = kNoElement;  // largest F_z among in-contact elements
   double max_fz_n = 0;
   std::int32_t slip_max_fz_index = kNoElement;  // largest F_z among the slipping elements
@@ -222,6 +223,7 @@ struct FingertipFlags {
   // min(slipping_elements, kMaxSlipElements) are set. What the viewers draw as slipping.
   std::array<std::uint32_t, kMaxSlipElements> slipping_ids{};
   double max_slip_mm = 0;  // largest per-frame displacement magnitude among in-contact elements
+  double total_fz_n = 0;   // the sum of the in-contact elements' F_z: the fingertip's grip
 };
 
 struct Flags {

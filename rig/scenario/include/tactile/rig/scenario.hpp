@@ -40,6 +40,8 @@ struct Scenario {
   std::vector<std::pair<std::string, double>> controller;
   // controller.slip_detector (paper, field, learned); empty: the control core's default.
   std::string slip_detector;
+  // controller.grip (paper, margin); empty: the control core's default.
+  std::string grip;
   // The disturbances' starts by stage, indexed by DisturbanceKind (their forces, masses and
   // absolute starts are in world.disturbance).
   std::array<DisturbanceStart, 3> disturbance_start;

@@ -173,6 +173,8 @@ struct SweepOptions {
   // Each scenario runs once per slip detector named here (control::to_string names), with
   // `--slip-detector NAME`: one row per scenario and detector.
   std::vector<std::string> detectors{"paper", "field", "learned"};
+  // Every run's grip (`--grip NAME`, control::to_string names); empty: the scenario's.
+  std::string grip;
   // Keep the runs whose reports `out` holds from an earlier run of this sweep (one a signal or a
   // kill cut short; its scenario file must be this draw's) and run only the others.
   bool resume = false;

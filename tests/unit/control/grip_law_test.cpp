@@ -1,0 +1,348 @@
+// The margin grip (docs/control.md, "The margin grip"): the servo's direction and bounds, the F2
+// bound, the force-rate limit, the friction estimate on slip and without, the relax after a safe
+// while, the feed-forward ahead of a planned acceleration, Phase II's target and non-finite
+// inputs. Table-driven where the law gives rules.
+#include "tactile/control/grip_law.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace tactile::control {
+namespace {
+
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+constexpr double kDt = 0.01;
+
+Config margin_config() {
+  Config c;
+  c.grip = GripKind::kMargin;
+  return c;
+}
+
+// mu_hat stays where the loads put it: the feed-forward's and the twist's figures are exact.
+Config steady_mu_config() {
+  Config c = margin_config();
+  c.grip_mu_rise_per_s = 0;
+  return c;
+}
+
+// Both fingertips press alike: one element each with normal force `fz` and tangential load
+// `load` along y_f (gravity); `slip` raises SLIP on both.
+class Grip {
+ public:
+  explicit Grip(const Config& cfg = margin_config()) : cfg_(cfg), law_(cfg) {
+    for (auto& tip : elements_)
+      tip.resize(1);
+  }
+  void press(double fz, double load) {
+    for (auto& tip : elements_) {
+      tip[0].contact = fz > 0;
+      tip[0].fz = fz;
+      tip[0].fy = load;
+    }
+  }
+  GripOutput step(bool slip = false, GripContext ctx = {}) {
+    std::array<FingertipInput, kFingertips> in{};
+    Flags flags;
+    for (std::size_t f = 0; f < kFingertips; ++f) {
+      in[f].elements = elements_[f];
+      in[f].fresh = true;
+      FingertipFlags& ff = flags.fingertip[f];
+      ff.total_fz_n = elements_[f][0].contact ? elements_[f][0].fz : 0.0;
+      ff.max_fz_n = ff.total_fz_n;
+      ff.max_fz_index = 0;
+      ff.slip = slip;
+    }
+    flags.slip = slip;
+    const GripOutput out = law_.update(flags, in, ctx, t_);
+    t_ += kDt;
+    return out;
+  }
+  // `seconds` of updates without slip.
+  void hold(double seconds, GripContext ctx = {}) {
+    for (double s = 0; s < seconds; s += kDt)
+      step(false, ctx);
+  }
+  GripLaw& law() { return law_; }
+  const Config& cfg() const { return cfg_; }
+  double t() const { return t_; }
+
+ private:
+  Config cfg_;
+  GripLaw law_;
+  std::array<std::vector<ElementReading>, kFingertips> elements_;
+  double t_ = 0;
+};
+
+TEST(GripLaw, ServoSqueezesTowardTheTargetAndNoFaster) {
+  struct Case {
+    double grip_n;
+    double sign;  // of the squeeze
+    const char* what;
+  };
+  // No load: the target is grip_min_n (0.1 N).
+  const Case cases[] = {{0.06, 1.0, "under the target: squeeze"},
+                        {0.3, -1.0, "over the target: open"},
+                        {0.02, 1.0, "far under: squeeze at the bound"},
+                        {2.0, -1.0, "far over: open at the bound"}};
+  for (const Case& c : cases) {
+    Grip g;
+    g.press(c.grip_n, 0.0);
+    // The reference starts at the grip and follows the target at the force rate.
+    GripOutput out = g.step();
+    for (int i = 0; i < 100; ++i)
+      out = g.step();
+    EXPECT_EQ(std::copysign(1.0, out.squeeze_mps), c.sign) << c.what;
+    EXPECT_LE(std::abs(out.squeeze_mps), g.cfg().grip_servo_max_speed_mps + 1e-15) << c.what;
+    const double expected =
+        std::clamp(g.cfg().grip_servo_gain_mps_per_n * (g.law().target_n() - c.grip_n),
+                   -g.cfg().grip_servo_max_speed_mps, g.cfg().grip_servo_max_speed_mps);
+    EXPECT_NEAR(out.squeeze_mps, expected, 1e-12) << c.what;
+  }
+}
+
+TEST(GripLaw, NoSqueezePastTheF2Bound) {
+  Grip g;
+  const double limit = g.cfg().recompress_max_f2_fraction * g.cfg().f2_n;
+  // A load that asks for far more than the bound allows.
+  g.press(limit, 3.0);
+  GripOutput out;
+  for (int i = 0; i < 20; ++i)
+    out = g.step();
+  EXPECT_GT(g.law().target_n(), limit);
+  EXPECT_LE(out.squeeze_mps, 0.0);
+  g.press(0.99 * limit, 3.0);
+  EXPECT_GT(g.step().squeeze_mps, 0.0) << "under the bound the servo squeezes again";
+}
+
+TEST(GripLaw, TheReferenceFollowsTheTargetAtTheForceRate) {
+  Grip g;
+  g.press(0.2, 0.08);  // the demand: 0.08 / 0.5 x 1.25 = 0.2 N
+  g.step();
+  EXPECT_NEAR(g.law().reference_n(), 0.2, 1e-12) << "the reference starts at the grip";
+  // A slip asks for 0.26 N at once; the reference takes it in steps of rate x dt.
+  g.step(true);
+  const double step = g.cfg().grip_force_rate_nps * kDt;
+  EXPECT_NEAR(g.law().target_n(), 0.2 * (1 + g.cfg().grip_slip_step), 1e-12);
+  // A load that needs 3 N: the target jumps, the reference does not.
+  g.press(0.2, 1.0);
+  double before = g.law().reference_n();
+  for (int i = 0; i < 5; ++i) {
+    g.step();
+    EXPECT_NEAR(g.law().reference_n() - before, step, 1e-9) << i;
+    before = g.law().reference_n();
+  }
+}
+
+TEST(GripLaw, SlipLowersTheFrictionEstimateToItsLoadRatio) {
+  struct Case {
+    double fz;
+    double load;
+    double mu_after;
+    const char* what;
+  };
+  const double mu0 = margin_config().grip_mu_initial;  // 0.5
+  const double floor = (1 - margin_config().grip_mu_drop) * mu0;
+  const Case cases[] = {
+      {0.5, 0.2, 0.4, "slip at a ratio below mu_hat: mu_hat is the ratio"},
+      {0.5, 0.15, floor, "a ratio far below: by at most grip_mu_drop"},
+      {0.5, 0.03, mu0, "a demand at grip_min_n: the estimate did not set the grip"},
+      {0.04, 0.01, mu0, "a touch lighter than grip_min_n gives no ratio"},
+  };
+  for (const Case& c : cases) {
+    Grip g;
+    g.press(c.fz, 0.0);
+    g.step();
+    g.press(c.fz, c.load);
+    g.step(true);
+    EXPECT_NEAR(g.law().mu_hat(), c.mu_after, 1e-12) << c.what;
+  }
+  // A slip while a planned acceleration is near is the load arriving, not news of the friction.
+  {
+    Grip g;
+    GripContext ahead;
+    ahead.accelerates_soon = true;
+    g.press(0.5, 0.2);
+    g.step(true, ahead);
+    EXPECT_NEAR(g.law().mu_hat(), mu0, 1e-12);
+  }
+  // A slip at a ratio above mu_hat does not raise it; carrying that ratio without slip does.
+  Grip g;
+  g.press(0.5, 0.4);
+  g.step(true);
+  EXPECT_NEAR(g.law().mu_hat(), mu0, 1e-12);
+  g.step(false);
+  EXPECT_NEAR(g.law().mu_hat(), 0.8, 1e-12) << "a ratio carried without slip bounds mu below";
+}
+
+TEST(GripLaw, FrictionEstimateRisesSlowlyAfterASafeWhileUpToTheSlipsCeiling) {
+  Config cfg = margin_config();
+  cfg.grip_mu_rise_per_s = 0.1;
+  Grip g{cfg};
+  g.press(0.5, 0.2);
+  g.step(true);  // mu_hat 0.5 -> 0.4; the ceiling: the middle of the drop, 0.425
+  EXPECT_NEAR(g.law().mu_hat(), 0.4, 1e-12);
+  g.hold(0.9 * cfg.grip_safe_s);
+  EXPECT_NEAR(g.law().mu_hat(), 0.4, 1e-12) << "not within the safe while";
+  g.hold(0.3);
+  EXPECT_GT(g.law().mu_hat(), 0.4);
+  EXPECT_LT(g.law().mu_hat(), 0.425);
+  g.hold(10.0);
+  EXPECT_NEAR(g.law().mu_hat(), (1 - 0.5 * cfg.grip_mu_drop) * 0.5, 1e-12) << "the ceiling";
+  // The default does not probe at all.
+  Grip still;
+  still.press(0.5, 0.2);
+  still.hold(5.0);
+  EXPECT_NEAR(still.law().mu_hat(), margin_config().grip_mu_initial, 1e-12);
+}
+
+TEST(GripLaw, TargetRaisedAtOnceOnSlipAndRelaxedAfterASafeWhile) {
+  Grip g;
+  g.press(0.3, 0.1);  // demand 0.1 / 0.5 x 1.25 = 0.25 N
+  g.step();
+  EXPECT_NEAR(g.law().demand_n(), 0.25, 1e-12);
+  g.step(true);  // the ratio 0.33 lowers mu_hat by grip_mu_drop, to 0.35
+  const double raised = g.law().target_n();
+  EXPECT_NEAR(raised, std::max(g.law().demand_n(), 0.3) * (1 + g.cfg().grip_slip_step), 1e-12);
+  g.hold(0.9 * g.cfg().grip_safe_s);
+  EXPECT_NEAR(g.law().target_n(), raised, 1e-12) << "held through the safe while";
+  g.hold(0.2);
+  EXPECT_LT(g.law().target_n(), raised) << "relaxing after it";
+  g.hold(10.0);
+  EXPECT_NEAR(g.law().target_n(), g.law().demand_n(), 1e-3) << "down to the demand";
+}
+
+TEST(GripLaw, AFirmGripThatSlipsStopsRelaxingWhereItIs) {
+  Grip g;
+  g.press(0.6, 0.1);  // demand 0.25 N: a raise of it (0.325 N) is under the grip
+  g.step();
+  g.step(true);
+  EXPECT_NEAR(g.law().target_n(), 0.6, 1e-12);
+  g.hold(0.9 * g.cfg().grip_safe_s);
+  EXPECT_NEAR(g.law().target_n(), 0.6, 1e-12) << "held through the safe while";
+}
+
+TEST(GripLaw, DemandIsTheLoadOverTheFrictionEstimateWithTheMargin) {
+  struct Case {
+    double load;
+    double demand;
+  };
+  const Config c = margin_config();
+  const Case cases[] = {
+      {0.0, c.grip_min_n}, {0.02, c.grip_min_n}, {0.1, 0.1 / 0.5 * 1.25}, {0.4, 0.4 / 0.5 * 1.25}};
+  for (const Case& k : cases) {
+    Grip g;
+    g.press(10.0, k.load);  // a grip far above the ratio: mu_hat stays at its start
+    g.step();
+    EXPECT_NEAR(g.law().demand_n(), k.demand, 1e-12) << k.load;
+  }
+}
+
+TEST(GripLaw, FeedForwardAheadOfAPlannedAcceleration) {
+  Grip g{steady_mu_config()};
+  GripContext carry;
+  carry.carrying = true;
+  g.press(1.0, 0.1);  // each fingertip carries 0.1 N: the weight is 0.2 N
+  g.hold(3.0, carry);
+  EXPECT_NEAR(g.law().weight_n(), 0.2, 1e-6);
+  const double steady = g.law().demand_n();
+  GripContext ahead = carry;
+  ahead.accelerates_soon = true;
+  g.step(false, ahead);
+  const double ff = 0.5 * g.law().weight_n() * g.cfg().grip_ff_accel_mps2 / 9.81;
+  EXPECT_NEAR(g.law().demand_n() - steady, ff / g.law().mu_hat() * (1 + g.cfg().grip_margin), 1e-9);
+  EXPECT_GE(g.law().target_n(), g.law().demand_n()) << "raised before the acceleration";
+}
+
+TEST(GripLaw, PhaseTwoHasItsOwnTarget) {
+  Grip g{steady_mu_config()};
+  GripContext carry;
+  carry.carrying = true;
+  g.press(1.0, 0.1);
+  g.hold(3.0, carry);  // the weight: 0.2 N
+  const double mu = g.law().mu_hat();
+  GripContext twist_grasp;
+  twist_grasp.twist = true;
+  twist_grasp.accelerates_soon = true;
+  g.press(1.0, 0.0);  // seated on the thread: no load before the turn
+  g.step(false, twist_grasp);
+  EXPECT_NEAR(g.law().demand_n(), 0.1 / mu * (1 + g.cfg().grip_twist_margin), 1e-9)
+      << "before the first turn: the carry's share of the weight, with the twist's margin";
+  GripContext turn;
+  turn.twist = true;
+  g.press(1.0, 0.3);
+  g.hold(0.5, turn);
+  g.press(1.0, 0.0);
+  g.step(false, twist_grasp);
+  EXPECT_NEAR(g.law().demand_n(), 0.3 / g.law().mu_hat() * (1 + g.cfg().grip_twist_margin), 1e-9)
+      << "before the next turn: the last turn's load";
+}
+
+TEST(GripLaw, NonFiniteInputsGiveFiniteOutputs) {
+  struct Case {
+    double fz;
+    double load;
+    const char* what;
+  };
+  const Case cases[] = {{kNan, 0.1, "NaN F_z"},
+                        {0.3, kNan, "NaN F_t"},
+                        {std::numeric_limits<double>::infinity(), 0.1, "infinite F_z"},
+                        {0.3, std::numeric_limits<double>::infinity(), "infinite F_t"}};
+  for (const Case& c : cases) {
+    Grip g;
+    g.press(0.3, 0.05);
+    g.step();
+    g.press(c.fz, c.load);
+    for (int i = 0; i < 10; ++i) {
+      const GripOutput out = g.step(i % 3 == 0);
+      EXPECT_TRUE(std::isfinite(out.squeeze_mps)) << c.what;
+    }
+    EXPECT_TRUE(std::isfinite(g.law().target_n())) << c.what;
+    EXPECT_TRUE(std::isfinite(g.law().mu_hat())) << c.what;
+  }
+  // A clock that is not finite: no step of time, still finite.
+  GripLaw law{margin_config()};
+  const std::array<FingertipInput, kFingertips> in{};
+  const GripOutput out = law.update(Flags{}, in, GripContext{}, kNan);
+  EXPECT_TRUE(std::isfinite(out.squeeze_mps));
+}
+
+TEST(GripLaw, ConfigRefusesBadParameters) {
+  struct Case {
+    double Config::*field;
+    double value;
+    const char* name;
+  };
+  const Case cases[] = {{&Config::grip_touch_n, 0.0, "grip_touch_n"},
+                        {&Config::grip_touch_n, 0.6, "grip_touch_n"},
+                        {&Config::grip_min_n, 0.04, "grip_min_n"},
+                        {&Config::grip_margin, -0.1, "grip_margin"},
+                        {&Config::grip_mu_initial, 2.0, "grip_mu_initial"},
+                        {&Config::grip_mu_max, 0.1, "grip_mu_max"},
+                        {&Config::grip_slip_step, 0.0, "grip_slip_step"},
+                        {&Config::grip_relax_s, 0.0, "grip_relax_s"},
+                        {&Config::grip_servo_max_speed_mps, 0.02, "grip_servo_max_speed_mps"},
+                        {&Config::grip_force_rate_nps, kNan, "grip_force_rate_nps"}};
+  for (const Case& c : cases) {
+    Config cfg = margin_config();
+    cfg.*(c.field) = c.value;
+    try {
+      cfg.validate();
+      ADD_FAILURE() << c.name << " = " << c.value << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(c.name), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(grip_from_string("margin"), GripKind::kMargin);
+  EXPECT_EQ(grip_from_string("paper"), GripKind::kPaper);
+  EXPECT_FALSE(grip_from_string("Margin").has_value());
+}
+
+}  // namespace
+}  // namespace tactile::control
