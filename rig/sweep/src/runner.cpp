@@ -8,10 +8,12 @@
 #include <cstdio>
 #include <list>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <stdexcept>
 #include <thread>
 
+#include "tactile/control/config.hpp"
 #include "tactile/rig/sweep.hpp"
 #include "tactile/util/files.hpp"
 #include "tactile/util/log.hpp"
@@ -64,6 +66,15 @@ struct Job {
   std::uint64_t index = 0;
   std::string detector;
 };
+
+// Whether a report was run with `grip` (--grip; empty: the drawn scenario's, which names none:
+// the control core's default).
+bool same_grip(const std::string& report_json, const std::string& grip) {
+  const std::string want = grip.empty() ? control::to_string(control::Config{}.grip) : grip;
+  const nlohmann::json r = nlohmann::json::parse(report_json);
+  const auto c = r.find("controller");
+  return c != r.end() && c->is_object() && c->value("grip", std::string()) == want;
+}
 
 // Starts PROGRAM --lockstep --scenario FILE --report FILE --slip-detector NAME [--grip G] in its
 // own process group (a Ctrl-C at the terminal reaches the sweep alone, which stops its children),
@@ -157,8 +168,11 @@ std::size_t run_sweep(const SweepOptions& o) {
       const fs::path report = paths_of(o.out, i, o.scenarios, detector).report;
       if (same_scenario && fs::exists(report)) {
         try {
-          // Reports are written whole (atomically): one that is there is the run's.
-          for (Row& r : rows_from_report(draws[i], util::read_file(report)))
+          // Reports are written whole (atomically): one that is there is the run's, unless it
+          // was run with another grip (--grip: the scenario file is the same).
+          const std::string text = util::read_file(report);
+          if (!same_grip(text, o.grip)) throw std::runtime_error("run with another grip");
+          for (Row& r : rows_from_report(draws[i], text))
             rows.push_back(std::move(r));
           ++kept;
           continue;

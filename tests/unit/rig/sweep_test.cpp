@@ -912,6 +912,31 @@ TEST(Sweep, ResumeRunsOnlyTheRunsAStopLeftWithoutAReportToTheSameTable) {
   ASSERT_EQ(other.exit_code, 0) << other.err;
   EXPECT_NE(other.err.find("resuming: 0 runs kept from their reports, 1 to run"), std::string::npos)
       << other.err;
+
+  // Nor the reports of another grip (the scenario files are the same): the whole sweep runs
+  // again with the margin grip, and resumed with the grip they had, all of them are kept.
+  const std::vector<std::string> margin{"--sweep",
+                                        "4",
+                                        "--seed",
+                                        "11",
+                                        "--max-sim-time",
+                                        "6",
+                                        "--detectors",
+                                        "paper",
+                                        "--grip",
+                                        "margin",
+                                        "--resume",
+                                        "--out",
+                                        (dir / "whole").string()};
+  const ProcessResult regripped = rig(margin);
+  ASSERT_EQ(regripped.exit_code, 0) << regripped.err;
+  EXPECT_NE(regripped.err.find("resuming: 0 runs kept from their reports, 4 to run"),
+            std::string::npos)
+      << regripped.err;
+  const ProcessResult again = rig(margin);
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(again.err.find("resuming: 4 runs kept from their reports, 0 to run"), std::string::npos)
+      << again.err;
 }
 
 TEST(Sweep, UsageErrorsExit2) {
