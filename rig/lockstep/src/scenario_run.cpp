@@ -22,11 +22,10 @@ const char* scenario_case(const WorldParams& w) {
 }
 
 void judge_negative_case(Report& r) {
-  const bool crushed = r.fragile && r.fragile->broken;
   if (r.scenario_case == "bottle_displaced") {
-    r.negative_case_passed = !r.release_classified && !r.opened_in_air && !crushed;
+    r.negative_case_passed = !r.release_classified && !r.opened_in_air;
   } else if (r.scenario_case == "cap_held") {
-    r.negative_case_passed = r.grasp_classified != "grasp" && !crushed;
+    r.negative_case_passed = r.grasp_classified != "grasp";
   } else {
     r.negative_case_passed.reset();
   }

@@ -427,11 +427,9 @@ void RunScorer::finish(bool dropped, double sim_time_s, std::uint64_t frames) {
   lead_.finish(0, rep.slip);
   lead_.finish(1, rep.slip_other);
   rep.grip = grip_.finish();
-  if (crush_.crush_force_n > 0) {
-    rep.fragile = crush_;
-    // A crushed object is a failed run, whatever the controller went on to do.
-    if (crush_.broken) rep.completed = false;
-  }
+  // A crushed cap is said by `fragile.broken` alone: `completed` and the negative cases stay the
+  // controller's decisions, so that they compare across grips and draws (docs/rig.md).
+  if (crush_.crush_force_n > 0) rep.fragile = crush_;
   if (cap_stop_ && declared_tight_) {
     rep.tight_time_error_s = declared_tight_->t - cap_stop_->t;
     rep.tight_error_deg = declared_tight_->wrist_turn_deg - cap_stop_->wrist_turn_deg;

@@ -85,8 +85,8 @@ TEST(Lockstep, DefaultScenarioGripIsAboveTheLeastThatHolds) {
 
 // A pull on the cap during the carry and a fragile cap (docs/rig.md, "Disturbances and fragile
 // objects"): the pull starts 0.5 s into TRANSPORT and the truth's need carries it; the paper's grip
-// (several newtons per fingertip) crushes a cap that breaks at 2 N and fails the run, and leaves
-// one that breaks just above the grip's peak whole.
+// (several newtons per fingertip) crushes a cap that breaks at 2 N (the report's fragile.broken;
+// completed stays the controller's), and leaves one that breaks just above the grip's peak whole.
 TEST(Lockstep, APullDuringTheCarryAndAFragileCap) {
   Scenario sc = load_scenario(kDir / "default.yaml");
   sc.world.disturbance.pull = {0.2, {0, 0, -1}, kNotYet, 0.0, 1.0};
@@ -108,8 +108,8 @@ TEST(Lockstep, APullDuringTheCarryAndAFragileCap) {
   EXPECT_GT(crushed.fragile->peak_grip_n, 2.0);
   EXPECT_GT(crushed.fragile->broken_at_s, 0.0);
   EXPECT_LT(crushed.fragile->broken_at_s, start) << "crushed by the grasp, before the carry";
-  EXPECT_FALSE(crushed.completed) << "a broken object fails the run";
-  EXPECT_EQ(crushed.end_reason, "done") << "the controller finished its task";
+  EXPECT_TRUE(crushed.completed) << "the controller finished its task; broken says the rest";
+  EXPECT_EQ(crushed.end_reason, "done");
   const nlohmann::json j = nlohmann::json::parse(report_json(crushed));
   EXPECT_EQ(j.at("disturbance").at("pull").at("start_s"), start);
   EXPECT_EQ(j.at("disturbance").at("pull").at("force_N"), 0.2);

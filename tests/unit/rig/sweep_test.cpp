@@ -263,7 +263,7 @@ TEST(SweepDraw, TheDisturbancesLeaveEveryOtherValueAsItWas) {
 }
 
 // The table's disturbance and fragility: the kind and crush force from the draw, broken from the
-// report; the summary counts them per kind and a broken object as not completed.
+// report; the summary counts them per kind, and the broken objects.
 TEST(SweepTable, DisturbanceAndBrokenComeFromTheDrawAndTheReport) {
   sweep::Draw d = sweep::draw_scenario(1, 0);
   d.disturbance = sweep::Disturbance::kKnock;
