@@ -28,6 +28,17 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
 }
 
 AtomicFileWriter::AtomicFileWriter(std::filesystem::path path) : path_(std::move(path)) {
+  // A device, FIFO or socket is written in place: a temporary file renamed over it would replace
+  // it (as root, `--report /dev/null` once made /dev/null a regular file for every program).
+  struct stat st {};
+  if (::stat(path_.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
+    fd_ = ::open(path_.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd_ < 0)
+      throw std::runtime_error(path_.string() +
+                               ": cannot open for writing: " + std::strerror(errno));
+    in_place_ = true;
+    return;
+  }
   const auto parent = path_.parent_path();
   if (!parent.empty()) {
     std::error_code ec;
@@ -47,14 +58,14 @@ AtomicFileWriter::AtomicFileWriter(std::filesystem::path path) : path_(std::move
 AtomicFileWriter::~AtomicFileWriter() {
   if (fd_ >= 0) {
     ::close(fd_);
-    ::unlink(tmp_.c_str());
+    if (!in_place_) ::unlink(tmp_.c_str());
   }
 }
 
 void AtomicFileWriter::fail(const std::string& what) {
   const std::string why = std::strerror(errno);
   ::close(fd_);
-  ::unlink(tmp_.c_str());
+  if (!in_place_) ::unlink(tmp_.c_str());
   fd_ = -1;
   throw std::runtime_error(path_.string() + ": " + what + ": " + why);
 }
@@ -76,6 +87,13 @@ void AtomicFileWriter::write(std::string_view bytes) {
 
 void AtomicFileWriter::commit() {
   if (fd_ < 0) throw std::runtime_error(path_.string() + ": commit after the file was closed");
+  if (in_place_) {
+    const int fd = fd_;
+    fd_ = -1;
+    if (::close(fd) != 0)
+      throw std::runtime_error(path_.string() + ": flush failed: " + std::strerror(errno));
+    return;
+  }
   if (::fsync(fd_) != 0) fail("flush failed");
   if (::close(fd_) != 0) {
     fd_ = -1;

@@ -5,7 +5,10 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
+#include <thread>
 
 #include "process.hpp"
 
@@ -86,6 +89,43 @@ TEST(ReadyFileNone, AnEmptyPathDoesNothing) {
   ReadyFile ready{fs::path()};
   ready.mark_ready();
   EXPECT_FALSE(ready.ready());
+}
+
+// A FIFO (as /dev/null, a device) is written in place: renamed over, it became a regular file,
+// and as root `--report /dev/null` once did that to /dev/null (issue 39's notes). The reader on
+// the other end gets the bytes and the FIFO is still a FIFO; a regular file is still replaced
+// whole.
+TEST(AtomicFileWriter, WritesADeviceOrFifoInPlaceNotReplacingIt) {
+  tactile::testing::TempDir tmp;
+  const fs::path fifo = tmp / "fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string got;
+  std::thread reader([&] {
+    std::ifstream in(fifo);
+    got.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  });
+  // A second name for the FIFO: were it replaced, the reader, blocked in its open, is let go
+  // through this one, and the test fails instead of hanging.
+  const fs::path link = tmp / "fifo-link";
+  ASSERT_EQ(::link(fifo.c_str(), link.c_str()), 0);
+  tactile::util::write_file_atomic(fifo, "report\n");
+  struct stat st {};
+  ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
+  const bool still_fifo = S_ISFIFO(st.st_mode);
+  if (!still_fifo) std::ofstream(link) << "";
+  reader.join();
+  EXPECT_TRUE(still_fifo) << "the FIFO was replaced";
+  EXPECT_EQ(got, "report\n");
+  EXPECT_EQ(std::distance(fs::directory_iterator(tmp.path()), fs::directory_iterator()), 2)
+      << "a temporary file was left";
+
+  const fs::path file = tmp / "file";
+  tactile::util::write_file_atomic(file, "old");
+  const ino_t before = fs::exists(file) ? (::stat(file.c_str(), &st), st.st_ino) : 0;
+  tactile::util::write_file_atomic(file, "new");
+  ASSERT_EQ(::stat(file.c_str(), &st), 0);
+  EXPECT_NE(st.st_ino, before) << "a regular file is replaced whole, not rewritten";
+  EXPECT_TRUE(S_ISREG(st.st_mode));
 }
 
 }  // namespace

@@ -17,7 +17,8 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
 // A file written in pieces that appears whole or not at all: the pieces go to a temporary file
 // beside `path` (missing parent directories are created); commit() flushes it to disk and renames
 // it over `path`. Destroyed without commit() (an error, a stop), it removes the temporary file and
-// leaves `path` as it was. Every failure throws std::runtime_error naming `path`.
+// leaves `path` as it was. A `path` that is a device, FIFO or socket (/dev/null, /dev/stdout) is
+// written in place instead. Every failure throws std::runtime_error naming `path`.
 class AtomicFileWriter {
  public:
   explicit AtomicFileWriter(std::filesystem::path path);
@@ -35,6 +36,7 @@ class AtomicFileWriter {
   std::filesystem::path path_;
   std::string tmp_;
   int fd_ = -1;
+  bool in_place_ = false;  // `path` is a device, FIFO or socket: written as it is, not replaced
 };
 
 // Makes sure files can be written into `dir` later: creates it when missing and creates and
