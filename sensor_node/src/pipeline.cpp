@@ -64,6 +64,13 @@ bool Pipeline::connect(const std::atomic<bool>& stop, bool initial) {
       try {
         cam_->start();
         ok = true;
+      } catch (const camera::CameraRefused& e) {
+        // It answered and refused: waiting will not change it.
+        throw std::runtime_error(fmt::format(
+            "{}; the calibration {} is for {}x{} {} images: calibrate this camera, or use one "
+            "that takes the calibration's image",
+            e.what(), cfg_.calibration_path.string(), cfg_.calibration.width,
+            cfg_.calibration.height, camera::to_string(cfg_.camera.pixel_format)));
       } catch (const std::exception& e) {
         why = e.what();
       }

@@ -395,6 +395,40 @@ struct AravisCamera::Impl {
     if (found != 1) control_socket = UdpSocket{};
   }
 
+  // The image asked must fit the camera's largest: WidthMax and HeightMax (SFNC: the largest
+  // image at the present binning, whatever the offsets), else the sensor's size. A camera
+  // without either is left to the region's read-back. Many cameras (and Aravis's fake, whose
+  // Width has no range check by default) would take a larger Width and send frames that are
+  // not the sensor's image.
+  void check_sensor_size(ArvCamera* cam) const {
+    GError* error = nullptr;
+    const auto feature = [&](const char* name) -> gint64 {
+      if (arv_camera_is_feature_available(cam, name, &error) == FALSE) {
+        g_clear_error(&error);
+        return 0;
+      }
+      const gint64 v = arv_camera_get_integer(cam, name, &error);
+      if (error != nullptr) {
+        g_clear_error(&error);
+        return 0;
+      }
+      return v;
+    };
+    gint64 max_w = feature("WidthMax");
+    gint64 max_h = feature("HeightMax");
+    const char* what = "largest image (WidthMax x HeightMax)";
+    if (max_w <= 0 || max_h <= 0) {
+      max_w = feature("SensorWidth");
+      max_h = feature("SensorHeight");
+      what = "sensor (SensorWidth x SensorHeight)";
+    }
+    if (max_w <= 0 || max_h <= 0) return;
+    if (options.width > max_w || options.height > max_h) {
+      throw CameraRefused(fmt::format("{}: the camera's {} is {}x{}; asked for {}x{} images",
+                                      where(), what, max_w, max_h, options.width, options.height));
+    }
+  }
+
   void configure() {
     ArvCamera* cam = camera.get();
     GError* error = nullptr;
@@ -408,6 +442,7 @@ struct AravisCamera::Impl {
     arv_camera_set_pixel_format(cam, detail::to_arv(options.pixel_format), &error);
     detail::throw_if_error(error, fmt::format("{}: cannot set pixel_format = {}", where(),
                                               to_string(options.pixel_format)));
+    check_sensor_size(cam);
     // The region: the whole image, or the one asked grown to the camera's increments.
     const bool asked_region = options.region.width != 0;
     const char* const instead =
@@ -442,7 +477,7 @@ struct AravisCamera::Impl {
     arv_camera_get_region(cam, &x, &y, &width, &height, &error);
     detail::throw_if_error(error, fmt::format("{}: cannot read the region", where()));
     if (x != want.x || y != want.y || width != want.width || height != want.height) {
-      throw std::runtime_error(fmt::format(
+      throw CameraRefused(fmt::format(
           "{}: asked the region x {} y {} width {} height {} of the {}x{} image; the camera "
           "took x {} y {} width {} height {}{}",
           where(), want.x, want.y, want.width, want.height, options.width, options.height, x, y,
@@ -454,9 +489,9 @@ struct AravisCamera::Impl {
     const ArvPixelFormat pixel_format = arv_camera_get_pixel_format(cam, &error);
     detail::throw_if_error(error, fmt::format("{}: cannot read the pixel format", where()));
     if (pixel_format != detail::to_arv(options.pixel_format)) {
-      throw std::runtime_error(fmt::format("{}: asked pixel_format = {}; the camera took 0x{:08x}",
-                                           where(), to_string(options.pixel_format),
-                                           static_cast<unsigned>(pixel_format)));
+      throw CameraRefused(fmt::format("{}: asked pixel_format = {}; the camera took 0x{:08x}",
+                                      where(), to_string(options.pixel_format),
+                                      static_cast<unsigned>(pixel_format)));
     }
     const double rate = arv_camera_get_frame_rate(cam, &error);
     detail::throw_if_error(error, fmt::format("{}: cannot read the frame rate", where()));

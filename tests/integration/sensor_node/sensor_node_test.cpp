@@ -317,6 +317,39 @@ TEST(SensorNodeRegion, MeasuresAsFromWholeFramesAndSaysWhichPartItReceives) {
   EXPECT_GE(touching, cal.elements.size() / 2) << "the pressed elements are in contact";
 }
 
+// A calibration for a larger image than the camera's sensor: the camera answers, so waiting
+// would never help; sensor_node stops at start-up with one line naming both sizes and the file
+// (before, the fake took Width 640 on its 320 x 240 sensor and sent frames that were not its
+// image: "reference refused" on every frame, for ever).
+TEST(SensorNode, ACameraSmallerThanTheCalibrationIsAStartUpErrorNamingBothSizes) {
+  TempDir dir;
+  testing::SceneOptions o;  // 640 x 480, 8 bits
+  Calibration cal = testing::grid_calibration(o, 8, 5, 60, 14);
+  cal.sensor_id = "left";
+  config::save_calibration(dir / "left.yaml", cal);
+  camera::FakeGvCameraOptions fo;
+  fo.address = "127.0.0.2";
+  fo.width = 320;
+  fo.height = 240;
+  camera::FakeGvCamera cam(fo);
+  const auto started = std::chrono::steady_clock::now();
+  const auto r = testing::run({TACTILE_SENSOR_NODE_PATH, "--camera", "127.0.0.2", "--calibration",
+                               (dir / "left.yaml").string(), "--publish",
+                               "ipc://" + (dir / "frames").string(), "--fps", "100"},
+                              15s);
+  const double took_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  std::fprintf(stderr, "[seen] %s", r.err.c_str());
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_LT(took_s, 10.0) << "stopped at start-up, not retried";
+  EXPECT_NE(r.err.find("320x240"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("640x480"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find((dir / "left.yaml").string()), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("retrying"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("reference"), std::string::npos) << r.err;
+  EXPECT_EQ(cam.frames_sent(), 0U) << "refused before acquisition started";
+}
+
 TEST(SensorNode, BadInputIsOneClearLine) {
   TempDir dir;
   std::ofstream(dir / "bad.yaml") << "format: tactile-calibration/1\nsensor_id: x\n";

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 
@@ -25,6 +26,14 @@ enum class FrameStatus : std::uint8_t {
 };
 
 std::string_view to_string(FrameStatus status);
+
+// A camera that answers but cannot take what was asked (an image larger than its sensor, a pixel
+// format or region it refuses or rounds): a configuration error, not a camera that may come back.
+// Programs stop at start-up on it instead of retrying.
+class CameraRefused : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 // What a camera delivers: fixed at open(), checked on every frame.
 struct FrameFormat {
