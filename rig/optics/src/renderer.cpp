@@ -37,14 +37,6 @@ void for_each_disk_pixel(Vec2 c, double r, F&& f) {
   }
 }
 
-// The feeler element (docs/rig.md, "The feeler element"): the columnar feeler's contact and the
-// eight conical feelers' contacts, each a disk of area proportional to the load it carries.
-struct FeelerContact {
-  double x = 0, y = 0;  // centre, image pixels
-  double r = 0;         // drawn radius: the contact's own, at least half a pixel
-  double level = 0;     // brightness over the background, output gray levels
-};
-using FeelerCluster = std::array<FeelerContact, 9>;
 constexpr std::size_t kCones = 8;
 
 // A contact of `area` px^2 at (x, y) at `level`. Below half a pixel's radius it is drawn at half a
@@ -56,10 +48,11 @@ FeelerContact feeler_contact(double x, double y, double area, double level) {
   return {x, y, drawn, level * (r * r) / (drawn * drawn)};
 }
 
-// The cluster of strength p (summed increment, output levels) centred at (cx, cy), under the
-// shear displacement (ux, uy) mm. The load, as the area L = p / level it would collapse, flattens
-// the column first, whose area saturates at pi r_c^2; the cones touch beyond L_on and share
-// L - L_on by the tilt: the leading side (towards the shear) carries more, the trailing side less.
+}  // namespace
+
+// The load, as the area L = p / level it would collapse, flattens the column first, whose area
+// saturates at pi r_c^2; the cones touch beyond L_on and share L - L_on by the tilt: the leading
+// side (towards the shear) carries more, the trailing side less.
 FeelerCluster feeler_cluster(const FeelerParams& f, double scale, double p, double cx, double cy,
                              double ux_mm, double uy_mm) {
   const double level = f.contact_level * scale;
@@ -82,6 +75,8 @@ FeelerCluster feeler_cluster(const FeelerParams& f, double scale, double p, doub
   return c;
 }
 
+namespace {
+
 // A contact's increment at pixel centre (x, y): its level times a one-pixel linear edge, so the
 // image moves smoothly with the contact (no aliasing of the edge).
 double contact_increment(const FeelerContact& c, double x, double y) {
@@ -89,14 +84,14 @@ double contact_increment(const FeelerContact& c, double x, double y) {
   return c.level * std::clamp(c.r - d + 0.5, 0.0, 1.0);
 }
 
+}  // namespace
+
 double cluster_increment(const FeelerCluster& cluster, double x, double y) {
   double s = 0;
   for (const FeelerContact& c : cluster)
     s += contact_increment(c, x, y);
   return s;
 }
-
-}  // namespace
 
 const char* to_string(ElementModel m) {
   switch (m) {

@@ -63,6 +63,21 @@ struct FeelerParams {
   double tilt_mm = 0.04;        // shear displacement at which that transfer is complete
 };
 
+// The feeler element's contacts (docs/rig.md, "The feeler element"): the column's, then the eight
+// cones' (azimuth i pi / 4), each a disk of area proportional to the load it carries.
+struct FeelerContact {
+  double x = 0, y = 0;  // centre, image pixels
+  double r = 0;         // drawn radius: the contact's own, at least half a pixel
+  double level = 0;     // brightness over the background, output gray levels
+};
+using FeelerCluster = std::array<FeelerContact, 9>;
+// The cluster of strength p (summed increment, output gray levels; `scale` from 8-bit levels to
+// them) centred at (cx, cy), under the shear displacement (ux, uy) mm.
+FeelerCluster feeler_cluster(const FeelerParams& f, double scale, double p, double cx, double cy,
+                             double ux_mm, double uy_mm);
+// The cluster's noiseless increment at pixel centre (x, y).
+double cluster_increment(const FeelerCluster& cluster, double x, double y);
+
 struct SensorOpticsParams {
   ElementModel element_model = ElementModel::kGaussian;
   FeelerParams feelers;
