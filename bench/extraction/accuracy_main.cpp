@@ -66,7 +66,7 @@ std::vector<Plan> plan(int frames) {
   return p;
 }
 
-// Issue 38's grid: Gaussian, elliptical (aspect 1.5 and 2) and flat-topped spots at
+// Issue 38's grid: Gaussian, elliptical (aspect 1.5 and 2), flat-topped and feeler spots at
 // peak-to-noise 25 to 150, 8-bit, the spot sizes of the target grid.
 std::vector<Plan> shape_grid(int frames) {
   std::vector<Plan> p;
@@ -87,6 +87,10 @@ std::vector<Plan> shape_grid(int frames) {
     for (double sigma : {1.5, 2.5})
       add(SpotShape::kElliptical, sigma * 2 / 3, 1.5, pnr);
   }
+  // The rig's feeler element (sigma unused; the contacts' level is the peak), after the others so
+  // that theirs keep their seeds.
+  for (double pnr : {25.0, 50.0, 100.0, 150.0})
+    add(SpotShape::kFeelers, 0.0, 1.0, pnr);
   return p;
 }
 
@@ -120,9 +124,10 @@ int run(int argc, char** argv) {
   app.add_flag("--target-grid-only", target_grid_only,
                "only the Gaussian target grid (sigma 1.5-4 px, peak-to-noise 25-150, 8-bit)");
   bool shapes_only = false;
-  app.add_flag("--shape-grid-only", shapes_only,
-               "only issue 38's grid: Gaussian, elliptical (aspect 1.5, 2) and flat-topped spots, "
-               "peak-to-noise 25-150, 8-bit, all with --frames frames");
+  app.add_flag(
+      "--shape-grid-only", shapes_only,
+      "only issue 38's grid: Gaussian, elliptical (aspect 1.5, 2), flat-topped and feeler spots, "
+      "peak-to-noise 25-150, 8-bit, all with --frames frames");
   std::string only_methods;
   app.add_option("--methods", only_methods,
                  "comma-separated methods to measure (default: all; names as in the CSV)");

@@ -31,6 +31,8 @@ testing::SceneOptions scene_options(const SpotSetting& s) {
 
 // The spot's extent: its largest sigma plus a plateau.
 double spot_extent(const SpotSetting& s) {
+  // The feeler cluster (load 40 px^2) reaches about 6 px: 3.5 x 2.5 + 1.5 px holds it.
+  if (s.shape == SpotShape::kFeelers) return 2.5;
   const double sy = s.shape == SpotShape::kElliptical ? s.aspect * s.sigma : s.sigma;
   return std::max(s.sigma, sy) + (s.shape == SpotShape::kFlatTop ? s.flat_radius : 0.0);
 }
@@ -160,6 +162,8 @@ std::string SpotSetting::shape_name() const {
     }
     case SpotShape::kFlatTop:
       return "flat-top";
+    case SpotShape::kFeelers:
+      return "feelers";
   }
   return "?";
 }

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "tactile/rig/optics.hpp"
+
 namespace tactile::testing {
 
 double level_scale(int bit_depth) {
@@ -33,6 +35,13 @@ double spot_at(const Spot& s, double x, double y) {
       const double e = r - s.flat_radius;
       return s.peak * std::exp(-e * e / (2 * s.sigma * s.sigma));
     }
+    case SpotShape::kFeelers: {
+      rig::FeelerParams f;
+      f.contact_level = s.peak;
+      const rig::FeelerCluster c =
+          rig::feeler_cluster(f, 1.0, s.feeler_load_px2 * s.peak, s.center.x, s.center.y, 0.0, 0.0);
+      return rig::cluster_increment(c, x, y);
+    }
   }
   return 0;
 }
@@ -46,6 +55,8 @@ std::uint32_t quantise(const SceneOptions& o, double v) {
 }
 
 double reach_of(const Spot& s) {
+  if (s.shape == SpotShape::kFeelers)
+    return rig::FeelerParams{}.cone_circle_px + std::sqrt(s.feeler_load_px2) + 2;
   return 8 * std::max(s.sigma, s.sigma_y) + s.flat_radius + 2;
 }
 

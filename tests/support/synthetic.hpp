@@ -12,7 +12,9 @@
 
 namespace tactile::testing {
 
-enum class SpotShape { kGaussian, kElliptical, kFlatTop };
+// kFeelers: the paper's element as the rig draws it (docs/rig.md, "The feeler element"), unsheared
+// (symmetric: its centroid is its centre), with `peak` the contacts' level.
+enum class SpotShape { kGaussian, kElliptical, kFlatTop, kFeelers };
 
 struct Spot {
   Vec2 center;         // true centroid, pixels
@@ -20,7 +22,8 @@ struct Spot {
   double sigma = 2.0;  // pixels (kElliptical: along x)
   double sigma_y = 0;  // kElliptical: along y (0 means sigma)
   SpotShape shape = SpotShape::kGaussian;
-  double flat_radius = 3;  // kFlatTop: radius of the plateau
+  double flat_radius = 3;       // kFlatTop: radius of the plateau
+  double feeler_load_px2 = 40;  // kFeelers: the load as the contact area it collapses, px^2
 };
 
 struct SceneOptions {

@@ -193,13 +193,15 @@ LockstepResult run_lockstep(const Scenario& sc, const LockstepOptions& opt) {
     if (!run.step(steps, dt)) break;
     ++frame;
     const double t = static_cast<double>(frame) / sc.camera.fps;
-    const GroundTruth& gt = run.take_truth(frame, phase);
+    // A copy (fixed arrays, no allocation): the truth's displacement is then the image's own.
+    GroundTruth gt = run.take_truth(frame, phase);
 
     // Render and measure both fingertips.
     control::ControllerInput in{};
     for (std::size_t i = 0; i < kFingertips; ++i) {
       extractors[i].measure(run.sensors().render(i, gt.fingertips[i]).view(),
                             {frame, static_cast<std::int64_t>(std::llround(t * 1e9))});
+      run.sensors().image_truth(i, gt.fingertips[i]);
       control::FingertipInput& tip = in.fingertips[i];
       tip.elements = extractors[i].readings();
       tip.normals = normals;

@@ -36,7 +36,8 @@ SimulatedSensors::SimulatedSensors(const Scenario& sc, const CameraParams& camer
     : calibrations_(simulated_calibrations(sc, camera, normals)),
       frame_rng_{util::Random(util::splitmix64(sc.seed * 4 + 1)),
                  util::Random(util::splitmix64(sc.seed * 4 + 2))},
-      truth_(visible_fz_n(calibrations_[0]), sc.partial_slip_ratio) {
+      truth_(visible_fz_n(calibrations_[0]), sc.partial_slip_ratio),
+      element_model_(sc.optics.element_model) {
   for (std::size_t i = 0; i < kFingertips; ++i)
     renderers_.emplace_back(calibrations_[i], camera, sc.optics,
                             util::splitmix64(sc.seed * 4 + 3 + i * 7919));
@@ -49,6 +50,16 @@ const Image& SimulatedSensors::render(std::size_t i, const FingertipTruth& truth
   }
   renderers_[i].render(loads_, frame_rng_[i], images_[i]);
   return images_[i];
+}
+
+void SimulatedSensors::image_truth(std::size_t i, FingertipTruth& truth) const {
+  if (element_model_ != ElementModel::kFeelers) return;
+  const Calibration& cal = calibrations_[i];
+  for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
+    const Vec2 c = renderers_[i].noiseless_centroid_px(k);
+    truth.elements[k].ux_mm = (c.x - cal.elements[k].zero_px.x) * cal.mm_per_px;
+    truth.elements[k].uy_mm = (c.y - cal.elements[k].zero_px.y) * cal.mm_per_px;
+  }
 }
 
 }  // namespace tactile::rig

@@ -37,7 +37,78 @@ void for_each_disk_pixel(Vec2 c, double r, F&& f) {
   }
 }
 
+constexpr std::size_t kCones = 8;
+
+// A contact of `area` px^2 at (x, y) at `level`. Below half a pixel's radius it is drawn at half a
+// pixel, dimmer by the ratio of the areas: its light stays in proportion to its area and does
+// not jump when it appears.
+FeelerContact feeler_contact(double x, double y, double area, double level) {
+  const double r = std::sqrt(std::max(area, 0.0) / std::numbers::pi);
+  const double drawn = std::max(r, 0.5);
+  return {x, y, drawn, level * (r * r) / (drawn * drawn)};
+}
+
 }  // namespace
+
+// The load, as the area L = p / level it would collapse, flattens the column first, whose area
+// saturates at pi r_c^2; the cones touch beyond L_on and share L - L_on by the tilt: the leading
+// side (towards the shear) carries more, the trailing side less.
+FeelerCluster feeler_cluster(const FeelerParams& f, double scale, double p, double cx, double cy,
+                             double ux_mm, double uy_mm) {
+  const double level = f.contact_level * scale;
+  const double load = std::max(p, 0.0) / level;
+  const double column_max = std::numbers::pi * f.column_radius_px * f.column_radius_px;
+  const double column = column_max * -std::expm1(-load / column_max);
+  const double cones = std::max(load - f.cone_onset * column_max, 0.0);
+  const double u = std::hypot(ux_mm, uy_mm);
+  const double tilt = f.tilt_share * std::min(u / f.tilt_mm, 1.0);
+  const double ex = u > 0 ? ux_mm / u : 0.0;
+  const double ey = u > 0 ? uy_mm / u : 0.0;
+  FeelerCluster c;
+  c[0] = feeler_contact(cx, cy, column, level);
+  for (std::size_t i = 0; i < kCones; ++i) {
+    const double a = 2.0 * std::numbers::pi * static_cast<double>(i) / kCones;
+    const double share = (1.0 + tilt * (std::cos(a) * ex + std::sin(a) * ey)) / kCones;
+    c[i + 1] = feeler_contact(cx + f.cone_circle_px * std::cos(a),
+                              cy + f.cone_circle_px * std::sin(a), cones * share, level);
+  }
+  return c;
+}
+
+namespace {
+
+// A contact's increment at pixel centre (x, y): its level times a one-pixel linear edge, so the
+// image moves smoothly with the contact (no aliasing of the edge).
+double contact_increment(const FeelerContact& c, double x, double y) {
+  const double d = std::hypot(x - c.x, y - c.y);
+  return c.level * std::clamp(c.r - d + 0.5, 0.0, 1.0);
+}
+
+}  // namespace
+
+double cluster_increment(const FeelerCluster& cluster, double x, double y) {
+  double s = 0;
+  for (const FeelerContact& c : cluster)
+    s += contact_increment(c, x, y);
+  return s;
+}
+
+const char* to_string(ElementModel m) {
+  switch (m) {
+    case ElementModel::kGaussian:
+      return "gaussian";
+    case ElementModel::kFeelers:
+      return "feelers";
+  }
+  return "?";
+}
+
+std::optional<ElementModel> element_model_from_string(std::string_view name) {
+  for (auto m : {ElementModel::kGaussian, ElementModel::kFeelers}) {
+    if (name == to_string(m)) return m;
+  }
+  return std::nullopt;
+}
 
 double level_scale(int bit_depth) {
   return bit_depth == 16 ? 257.0 : 1.0;
@@ -164,6 +235,14 @@ Renderer::Renderer(const Calibration& cal, const CameraParams& cam, const Sensor
   }
   cache_value_.assign(offset, 0.0F);
   cache_sigma_.assign(offset, 0.0F);
+  std::size_t largest_box = 0;
+  for (const Box& b : boxes_)
+    largest_box = std::max(largest_box, static_cast<std::size_t>(b.x1 - b.x0 + 1) *
+                                            static_cast<std::size_t>(b.y1 - b.y0 + 1));
+  increment_.assign(largest_box, 0.0F);
+  centroid_px_.resize(cal_.elements.size());
+  for (std::size_t k = 0; k < cal_.elements.size(); ++k)
+    centroid_px_[k] = cal_.elements[k].zero_px;
   last_.assign(cal_.elements.size(), ElementLoad{});
   drawn_.assign(cal_.elements.size(), false);
 
@@ -180,7 +259,7 @@ Renderer::Renderer(const Calibration& cal, const CameraParams& cam, const Sensor
     return sd * sd + (ref_factor - 1.0) * sd_ref * sd_ref + ref_factor / 12.0;
   };
   struct DiskPixel {
-    double r2, bg, base;
+    double dx, dy, r2, bg, base;
   };
   std::vector<DiskPixel> disk;
   g_table_.resize(cal_.elements.size());
@@ -193,12 +272,26 @@ Renderer::Renderer(const Calibration& cal, const CameraParams& cam, const Sensor
       const double dy = y - e.center_px.y;
       const double bg = background_at(x, y);
       const double base = partial_expectation(0.0, cal_.noise_floor, std::sqrt(variance(bg, 0)));
-      disk.push_back({dx * dx + dy * dy, bg, base});
+      disk.push_back({dx, dy, dx * dx + dy * dy, bg, base});
       base_sum += base;
     });
     auto& table = g_table_[k];
     table.reserve(strength_grid_.size());
     for (double p : strength_grid_) {
+      if (opt_.element_model == ElementModel::kFeelers) {
+        // The cluster unsheared, about the disk's centre (its G hardly moves with the shear:
+        // the cones' shares sum to one).
+        const FeelerCluster cluster = feeler_cluster(opt_.feelers, scale_, p, 0.0, 0.0, 0.0, 0.0);
+        double g = base_sum;
+        for (const DiskPixel& d : disk) {
+          const double s = std::min(cluster_increment(cluster, d.dx, d.dy), max_level_ - d.bg);
+          if (s < 1e-4 * scale_) continue;
+          g += partial_expectation(s, cal_.noise_floor, std::sqrt(variance(d.bg, s))) - d.base;
+        }
+        if (!table.empty()) g = std::max(g, table.back());
+        table.push_back(g);
+        continue;
+      }
       const double peak_ref = opt_.spot_peak_ref * scale_;
       const double sigma = std::clamp(std::sqrt(p / (2.0 * std::numbers::pi * peak_ref)),
                                       opt_.spot_sigma_min_px, opt_.spot_sigma_max_px);
@@ -262,18 +355,27 @@ double Renderer::strength_for_g(std::size_t k, double g) const {
 }
 
 void Renderer::draw_spot(std::size_t k, const ElementLoad& load) {
-  const Box& b = boxes_[k];
   const ElementCalibration& e = cal_.elements[k];
   const double fz = std::isfinite(load.fz_n) ? std::max(load.fz_n, 0.0) : 0.0;
   const double p = fz > 0 ? strength_for_g(k, cal_.normal_curve.inverse(fz)) : 0.0;
-  const double peak_ref = opt_.spot_peak_ref * scale_;
-  const double sigma = std::clamp(std::sqrt(p / (2.0 * std::numbers::pi * peak_ref)),
-                                  opt_.spot_sigma_min_px, opt_.spot_sigma_max_px);
-  const double peak = p / (2.0 * std::numbers::pi * sigma * sigma);
   const double ux = std::isfinite(load.ux_mm) ? load.ux_mm : 0.0;
   const double uy = std::isfinite(load.uy_mm) ? load.uy_mm : 0.0;
   const double cx = e.zero_px.x + ux / cal_.mm_per_px;
   const double cy = e.zero_px.y + uy / cal_.mm_per_px;
+  if (opt_.element_model == ElementModel::kFeelers) {
+    draw_feelers(k, p, cx, cy, ux, uy);
+  } else {
+    draw_gaussian(k, p, cx, cy);
+  }
+  centroid_from_cache(k, cx, cy);
+}
+
+void Renderer::draw_gaussian(std::size_t k, double p, double cx, double cy) {
+  const Box& b = boxes_[k];
+  const double peak_ref = opt_.spot_peak_ref * scale_;
+  const double sigma = std::clamp(std::sqrt(p / (2.0 * std::numbers::pi * peak_ref)),
+                                  opt_.spot_sigma_min_px, opt_.spot_sigma_max_px);
+  const double peak = p / (2.0 * std::numbers::pi * sigma * sigma);
   const std::size_t w = static_cast<std::size_t>(b.x1 - b.x0 + 1);
   const double inv = 1.0 / (2.0 * sigma * sigma);
   // The spot is separable: exp(-dx^2 inv) once per column instead of once per pixel (the same
@@ -307,6 +409,58 @@ void Renderer::draw_spot(std::size_t k, const ElementLoad& load) {
       cache_sigma_[row + u] = static_cast<float>(pixel_sigma(v));
     }
   }
+}
+
+void Renderer::draw_feelers(std::size_t k, double p, double cx, double cy, double ux_mm,
+                            double uy_mm) {
+  const Box& b = boxes_[k];
+  const auto w = static_cast<std::size_t>(b.x1 - b.x0 + 1);
+  const auto h = static_cast<std::size_t>(b.y1 - b.y0 + 1);
+  std::fill_n(increment_.begin(), static_cast<std::ptrdiff_t>(w * h), 0.0F);
+  // Each contact only over its own bounding box (within the element's box).
+  for (const FeelerContact& c : feeler_cluster(opt_.feelers, scale_, p, cx, cy, ux_mm, uy_mm)) {
+    if (!(c.level > 0)) continue;
+    const int x0 = std::max(b.x0, static_cast<int>(std::floor(c.x - c.r - 0.5)));
+    const int x1 = std::min(b.x1, static_cast<int>(std::ceil(c.x + c.r + 0.5)));
+    const int y0 = std::max(b.y0, static_cast<int>(std::floor(c.y - c.r - 0.5)));
+    const int y1 = std::min(b.y1, static_cast<int>(std::ceil(c.y + c.r + 0.5)));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x)
+        increment_[static_cast<std::size_t>(y - b.y0) * w + static_cast<std::size_t>(x - b.x0)] +=
+            static_cast<float>(contact_increment(c, x, y));
+  }
+  for (int y = b.y0; y <= b.y1; ++y) {
+    const Span& span = spans_[b.span_offset + static_cast<std::size_t>(y - b.y0)];
+    const std::size_t pixel = static_cast<std::size_t>(y) * cam_.width + b.x0;
+    const std::size_t row = static_cast<std::size_t>(y - b.y0) * w;
+    for (int j = span.x0; j < span.x1; ++j) {
+      const auto u = static_cast<std::size_t>(j);
+      const double v =
+          static_cast<double>(background_[pixel + u]) + static_cast<double>(increment_[row + u]);
+      cache_value_[b.offset + row + u] = static_cast<float>(v);
+      cache_sigma_[b.offset + row + u] = static_cast<float>(pixel_sigma(v));
+    }
+  }
+}
+
+void Renderer::centroid_from_cache(std::size_t k, double cx, double cy) {
+  const Box& b = boxes_[k];
+  const auto w = static_cast<std::size_t>(b.x1 - b.x0 + 1);
+  double sum = 0, sx = 0, sy = 0;
+  for (int y = b.y0; y <= b.y1; ++y) {
+    const Span& span = spans_[b.span_offset + static_cast<std::size_t>(y - b.y0)];
+    const std::size_t pixel = static_cast<std::size_t>(y) * cam_.width + b.x0;
+    const std::size_t row = b.offset + static_cast<std::size_t>(y - b.y0) * w;
+    for (int j = span.x0; j < span.x1; ++j) {
+      const auto u = static_cast<std::size_t>(j);
+      const double dg =
+          static_cast<double>(cache_value_[row + u]) - static_cast<double>(background_[pixel + u]);
+      sum += dg;
+      sx += dg * (b.x0 + j);
+      sy += dg * y;
+    }
+  }
+  centroid_px_[k] = sum > 0 ? Vec2{sx / sum, sy / sum} : Vec2{cx, cy};
 }
 
 void Renderer::render(std::span<const ElementLoad> loads, util::Random& rng, Image& out) {

@@ -45,6 +45,13 @@ double want(const Node& sec, std::string_view key, double fallback, double lo, d
   return n ? checked(*n, lo, hi) : fallback;
 }
 
+// A named choice (slip_detector, grip, element_model), refused unless `parse` knows it.
+template <typename Parse>
+std::string choice(const Node& n, Parse parse, const char* names) {
+  if (!parse(n.as_string())) n.fail(std::string("must be ") + names + ", is " + n.text());
+  return n.as_string();
+}
+
 }  // namespace
 
 int Scenario::steps_per_frame() const {
@@ -183,8 +190,12 @@ void parse_fingertip(const Node& ft, FingertipParams& fp) {
 }
 
 void parse_optics(const Node& so, SensorOpticsParams& o) {
-  so.refuse_unknown_keys({"mm_per_px", "disk_radius_px", "spot_peak_ref", "spot_sigma_min_px",
-                          "spot_sigma_max_px", "contact_on", "contact_off"});
+  so.refuse_unknown_keys({"element_model", "mm_per_px", "disk_radius_px", "spot_peak_ref",
+                          "spot_sigma_min_px", "spot_sigma_max_px", "contact_on", "contact_off"});
+  if (auto model = so.find("element_model")) {
+    o.element_model =
+        *element_model_from_string(choice(*model, element_model_from_string, kElementModelNames));
+  }
   o.mm_per_px = want(so, "mm_per_px", o.mm_per_px, 0.001, 1.0);
   o.disk_radius_px = want(so, "disk_radius_px", o.disk_radius_px, 4.0, 20.0);
   o.spot_peak_ref = want(so, "spot_peak_ref", o.spot_peak_ref, 5.0, 250.0);
@@ -273,13 +284,6 @@ void parse_disturbance(const Node& dist, Scenario& s) {
                 by_stage[static_cast<std::size_t>(DisturbanceKind::kKnock)]);
     d.knock.duration_s = want(*knock, "duration_s", d.knock.duration_s, 1e-4, 0.1);
   }
-}
-
-// A named choice of the control core (slip_detector, grip), refused unless `parse` knows it.
-template <typename Parse>
-std::string choice(const Node& n, Parse parse, const char* names) {
-  if (!parse(n.as_string())) n.fail(std::string("must be ") + names + ", is " + n.text());
-  return n.as_string();
 }
 
 // Overrides of the controller's settings, by the names of controller_keys().

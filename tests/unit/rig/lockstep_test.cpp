@@ -56,6 +56,21 @@ TEST(Lockstep, DefaultScenarioTellsThePapersStory) {
   EXPECT_FALSE(r.series.snapshots.empty());
 }
 
+// The paper's feeler element in the optics (docs/rig.md, "The feeler element"): the default
+// scenario's outcomes hold, and the truth's displacement is the cluster's own centroid.
+TEST(Lockstep, DefaultScenarioWithTheFeelerElementCompletes) {
+  Scenario s = load_scenario(kDir / "default.yaml");
+  s.optics.element_model = ElementModel::kFeelers;
+  const Report rep = run_lockstep(s).report;
+  EXPECT_TRUE(rep.completed) << rep.end_reason;
+  EXPECT_FALSE(rep.dropped);
+  EXPECT_EQ(rep.grasp_classified, std::optional<std::string>("grasp"));
+  EXPECT_EQ(rep.release_classified, std::optional<std::string>("release"));
+  EXPECT_EQ(rep.tightened_cycle, rep.true_tight_cycle);
+  EXPECT_EQ(rep.over_events, 0);
+  EXPECT_LE(rep.force_rmse_normal_N, 0.02 * rep.normal_full_scale_N);
+}
+
 // The grip's truth on the default scenario (docs/rig.md, "The grip's truth"): the paper's grip
 // holds the cap with more than the least that holds, the cap barely slides in the fingers while
 // carried, and every re-compression is counted under its stage.

@@ -12,12 +12,16 @@
 namespace tactile::rig {
 namespace {
 
-TEST(RigAllocation, StepTruthAndRenderAllocateNothing) {
+class RigRenderAllocation : public ::testing::TestWithParam<ElementModel> {};
+
+TEST_P(RigRenderAllocation, StepTruthAndRenderAllocateNothing) {
   World w{WorldParams{}};
   const auto normals = w.element_normals();
   const CameraParams cam;
-  const Calibration cal = make_calibration("left", cam, SensorOpticsParams{}, normals);
-  Renderer r(cal, cam, SensorOpticsParams{}, 2);
+  SensorOpticsParams opt;
+  opt.element_model = GetParam();
+  const Calibration cal = make_calibration("left", cam, opt, normals);
+  Renderer r(cal, cam, opt, 2);
   TruthRecorder truth(0.04, 0.1);
   util::Random rng(4);
   Image img;
@@ -47,6 +51,9 @@ TEST(RigAllocation, StepTruthAndRenderAllocateNothing) {
   EXPECT_EQ(count, 0U);
   EXPECT_GT(grip_needed, 0.0);
 }
+
+INSTANTIATE_TEST_SUITE_P(ElementModels, RigRenderAllocation,
+                         ::testing::Values(ElementModel::kGaussian, ElementModel::kFeelers));
 
 // The grip's record of each frame (the report's `grip`) allocates nothing once reserved.
 TEST(RigAllocation, GripScorerAddAllocatesNothingAfterReserve) {

@@ -260,5 +260,17 @@ TEST(Scenario, ControllerGripIsANameItKnows) {
   EXPECT_NE(e.find("paper or margin"), std::string::npos) << e;
 }
 
+TEST(Scenario, SensorElementModelIsANameItKnows) {
+  EXPECT_EQ(parse_scenario(kMinimal + "sensor: {element_model: feelers}\n", "s.yaml")
+                .optics.element_model,
+            ElementModel::kFeelers);
+  EXPECT_EQ(parse_scenario(kMinimal, "s.yaml").optics.element_model, ElementModel::kGaussian);
+  const std::string e = error_of(kMinimal + "sensor: {element_model: conical}\n");
+  EXPECT_NE(e.find("s.yaml"), std::string::npos) << e;
+  EXPECT_NE(e.find("sensor.element_model"), std::string::npos) << e;
+  EXPECT_NE(e.find("conical"), std::string::npos) << e;
+  EXPECT_NE(e.find("gaussian or feelers"), std::string::npos) << e;
+}
+
 }  // namespace
 }  // namespace tactile::rig

@@ -41,6 +41,11 @@ class SimulatedSensors {
   // Renders fingertip i's image of the loads in `truth` (all zero: no load). Allocates nothing
   // once the image has its size.
   const Image& render(std::size_t fingertip, const FingertipTruth& truth);
+  // The truth's shear displacement as the image defines it, after render(fingertip, truth):
+  // with the feeler element model, each element's (u_x, u_y) becomes the paper's eq. 3-4 on its
+  // noiseless image less zero_px, in mm (the cluster's light is not centred on its deflection);
+  // with the Gaussian model it stays the deflection. Allocates nothing.
+  void image_truth(std::size_t fingertip, FingertipTruth& truth) const;
 
  private:
   std::array<Calibration, kFingertips> calibrations_;
@@ -49,6 +54,7 @@ class SimulatedSensors {
   std::array<Image, kFingertips> images_;
   std::array<ElementLoad, kElementsPerFingertip> loads_{};
   TruthRecorder truth_;
+  ElementModel element_model_;
 };
 
 }  // namespace tactile::rig

@@ -7,8 +7,10 @@
 // Pure: no I/O, no clocks. render() allocates nothing once the output image has its size.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "tactile/calibration.hpp"
@@ -40,7 +42,45 @@ struct CameraParams {
   bool live_background = true;
 };
 
+// What an element's contact looks like in the image (docs/rig.md, "Optics"): a smooth Gaussian
+// spot, or the paper's element, one columnar feeler and eight conical feelers whose contacts
+// collapse onto the acrylic as a cluster of bright disks.
+enum class ElementModel : std::uint8_t { kGaussian, kFeelers };
+const char* to_string(ElementModel m);
+std::optional<ElementModel> element_model_from_string(std::string_view name);
+// The names element_model_from_string accepts, for error messages.
+inline constexpr const char* kElementModelNames = "gaussian or feelers";
+
+// The feeler model's geometry and brightness (docs/rig.md, "The feeler element"). Lengths in
+// pixels, levels in 8-bit gray levels.
+struct FeelerParams {
+  double contact_level = 120.0;   // brightness of a collapsed contact over the background
+  double column_radius_px = 2.0;  // the columnar feeler's flat contact when fully collapsed
+  // The cones touch once the load would collapse this fraction of the column's full area.
+  double cone_onset = 0.5;
+  double cone_circle_px = 4.5;  // the conical feelers' tips: a circle around the column
+  double tilt_share = 0.8;      // load moved from the trailing to the leading cones, at most
+  double tilt_mm = 0.04;        // shear displacement at which that transfer is complete
+};
+
+// The feeler element's contacts (docs/rig.md, "The feeler element"): the column's, then the eight
+// cones' (azimuth i pi / 4), each a disk of area proportional to the load it carries.
+struct FeelerContact {
+  double x = 0, y = 0;  // centre, image pixels
+  double r = 0;         // drawn radius: the contact's own, at least half a pixel
+  double level = 0;     // brightness over the background, output gray levels
+};
+using FeelerCluster = std::array<FeelerContact, 9>;
+// The cluster of strength p (summed increment, output gray levels; `scale` from 8-bit levels to
+// them) centred at (cx, cy), under the shear displacement (ux, uy) mm.
+FeelerCluster feeler_cluster(const FeelerParams& f, double scale, double p, double cx, double cy,
+                             double ux_mm, double uy_mm);
+// The cluster's noiseless increment at pixel centre (x, y).
+double cluster_increment(const FeelerCluster& cluster, double x, double y);
+
 struct SensorOpticsParams {
+  ElementModel element_model = ElementModel::kGaussian;
+  FeelerParams feelers;
   double mm_per_px = 0.025;
   double disk_radius_px = 14.0;
   // Radius of each ring of element disks in a 480-row image (scaled with the image).
@@ -99,6 +139,9 @@ class Renderer {
   double expected_g(std::size_t k, double p) const;
   // The drawn strength whose expected measured G is `g` (0 for g at or below the noise's own).
   double strength_for_g(std::size_t k, double g) const;
+  // The paper's eq. 3-4 on element k's noiseless image as last rendered: the increment-weighted
+  // centroid of its disk's pixels (the spot's centre when it has no increment), image pixels.
+  Vec2 noiseless_centroid_px(std::size_t k) const { return centroid_px_[k]; }
   // Spots whose noiseless pixels the last render() recomputed (their load changed).
   std::size_t redrawn_spots() const { return redrawn_; }
   // Noise standard deviation of a background pixel at (x, y), output gray levels.
@@ -117,6 +160,9 @@ class Renderer {
     int x0, x1;
   };
   void draw_spot(std::size_t k, const ElementLoad& load);
+  void draw_gaussian(std::size_t k, double p, double cx, double cy);
+  void draw_feelers(std::size_t k, double p, double cx, double cy, double ux_mm, double uy_mm);
+  void centroid_from_cache(std::size_t k, double cx, double cy);
   template <typename Pixel>
   void noisy_box(std::size_t k, util::Random& rng, Image& out) const noexcept;
 
@@ -131,6 +177,8 @@ class Renderer {
   std::vector<double> column_exp_;  // draw_spot's per-column factor exp(-(x - cx)^2 / 2 sigma^2)
   std::vector<float> cache_value_;  // noiseless pixel values of every box
   std::vector<float> cache_sigma_;  // their noise sigmas
+  std::vector<float> increment_;    // draw_feelers' scratch: one box's increments
+  std::vector<Vec2> centroid_px_;   // noiseless_centroid_px of every element
   std::vector<ElementLoad> last_;
   std::vector<bool> drawn_;
   // Per element: expected G at strengths strength_grid_ (monotonic).
