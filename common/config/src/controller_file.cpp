@@ -56,6 +56,8 @@ const DoubleField kDoubles[] = {
     {"grip_relax_s", &Config::grip_relax_s},
     {"grip_load_window_s", &Config::grip_load_window_s},
     {"grip_servo_gain_mps_per_n", &Config::grip_servo_gain_mps_per_n},
+    {"grip_servo_gain_period_s", &Config::grip_servo_gain_period_s},
+    {"grip_reach_timeout_s", &Config::grip_reach_timeout_s},
     {"grip_servo_max_speed_mps", &Config::grip_servo_max_speed_mps},
     {"grip_force_rate_nps", &Config::grip_force_rate_nps},
     {"grip_ff_accel_mps2", &Config::grip_ff_accel_mps2},

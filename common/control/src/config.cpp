@@ -117,10 +117,12 @@ void validate_margin_grip(const Config& c) {
   positive("grip_relax_s", c.grip_relax_s);
   positive("grip_load_window_s", c.grip_load_window_s);
   positive("grip_servo_gain_mps_per_n", c.grip_servo_gain_mps_per_n);
+  positive("grip_servo_gain_period_s", c.grip_servo_gain_period_s);
   positive("grip_servo_max_speed_mps", c.grip_servo_max_speed_mps);
   at_most("grip_servo_max_speed_mps", c.grip_servo_max_speed_mps, "max_finger_speed_mps",
           c.max_finger_speed_mps);
   positive("grip_force_rate_nps", c.grip_force_rate_nps);
+  non_negative("grip_reach_timeout_s", c.grip_reach_timeout_s);
   non_negative("grip_ff_accel_mps2", c.grip_ff_accel_mps2);
   non_negative("grip_ff_lead_s", c.grip_ff_lead_s);
 }

@@ -103,7 +103,7 @@ void GraspMoveTwistController::end(EventKind kind, const char* text, StepOutput&
 
 void GraspMoveTwistController::step_sequencers(const ControllerInput& in, const Flags& flags,
                                                StepOutput& out) noexcept {
-  const StepInput step{in.fingertips, flags, in.arm, task_s_};
+  const StepInput step{in.fingertips, flags, in.arm, task_s_, speed_.grip_ready()};
   switch (stage_) {
     case Stage::kNotStarted:
       if (cfg_.task == Task::kTwistOnly) {

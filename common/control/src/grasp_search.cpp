@@ -14,7 +14,7 @@ bool GraspSearch::all_touched() const {
   return std::all_of(touched_.begin(), touched_.end(), [](bool touched) { return touched; });
 }
 
-GraspProgress GraspSearch::update(const Flags& flags, double t) noexcept {
+GraspProgress GraspSearch::update(const Flags& flags, double t, bool grip_ready) noexcept {
   GraspProgress p;
   if (stage_ == Stage::kSearch) {
     for (std::size_t f = 0; f < kFingertips; ++f) {
@@ -30,7 +30,8 @@ GraspProgress GraspSearch::update(const Flags& flags, double t) noexcept {
       return p;
     }
   }
-  if (stage_ == Stage::kSettle && t - since_s_ >= settle_s_) {
+  if (stage_ == Stage::kSettle && t - since_s_ >= settle_s_ &&
+      (grip_ready || t - since_s_ >= settle_s_ + reach_timeout_s_)) {
     p.settled = true;
     stage_ = Stage::kIdle;
   }

@@ -149,6 +149,10 @@ void GripLaw::settle(const GripContext& ctx, double now_s, double dt) noexcept {
   }
 }
 
+bool GripLaw::reached() const noexcept {
+  return has_ref_ && grip_n_ >= kReachedFraction * target_n_;
+}
+
 GripOutput GripLaw::update(const Flags& flags,
                            const std::array<FingertipInput, kFingertips>& inputs,
                            const GripContext& ctx, double now_s) noexcept {
@@ -180,8 +184,13 @@ GripOutput GripLaw::update(const Flags& flags,
   const double step = cfg_.grip_force_rate_nps * dt;
   ref_n_ += std::clamp(target_n_ - ref_n_, -step, step);
 
-  double v = std::clamp(cfg_.grip_servo_gain_mps_per_n * (ref_n_ - grip_n_),
-                        -cfg_.grip_servo_max_speed_mps, cfg_.grip_servo_max_speed_mps);
+  // The speed holds until the next update: over a longer period it must be slower for the same
+  // squeeze per period (a loop gain that does not grow with the camera's period).
+  const double period_s = dt > 0 ? dt : cfg_.grip_servo_gain_period_s;
+  const double gain =
+      cfg_.grip_servo_gain_mps_per_n * std::min(1.0, cfg_.grip_servo_gain_period_s / period_s);
+  double v = std::clamp(gain * (ref_n_ - grip_n_), -cfg_.grip_servo_max_speed_mps,
+                        cfg_.grip_servo_max_speed_mps);
   // F2 bounds the squeeze: no element past recompress_max_f2_fraction of it.
   const double limit_n = cfg_.recompress_max_f2_fraction * cfg_.f2_n;
   for (const FingertipFlags& ff : flags.fingertip) {

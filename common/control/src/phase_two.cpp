@@ -100,9 +100,15 @@ void PhaseTwoSequencer::turn(const StepInput& in, SegmentIds& ids, StepOutput& o
   // field and learned detectors, on at least kTwistSlipElements elements: they decide each
   // element from more signals than its motion, and a single element's false slip in each of two
   // turns would declare a free-turning cap tight by the two-cycle rule.
+  // The margin grip holds the cap lightly: the turn's own start shears the contact past its rim's
+  // stick, a slip of the arm's acceleration, not of the cap's resistance (the grip answers it as
+  // it does the carry's); the paper's grip, at F1, counts every slip as the paper does.
+  const bool starting =
+      cfg_.grip == GripKind::kMargin && seq_.segment_started_within(in.t, cfg_.grip_ff_lead_s);
   for (const FingertipFlags& f : in.flags.fingertip) {
     const bool counts =
-        f.slip && (!beyond_paper(cfg_.slip_detector) || f.slipping_elements >= kTwistSlipElements);
+        !starting && f.slip &&
+        (!beyond_paper(cfg_.slip_detector) || f.slipping_elements >= kTwistSlipElements);
     if (counts) ++cycle_slips_;
   }
   const char* why = tightness();

@@ -69,7 +69,7 @@ bool Sequencer::segment_done(const StepInput& in, StepOutput& out) noexcept {
 }
 
 bool Sequencer::grasp_settled(const StepInput& in, StepOutput& out) noexcept {
-  const GraspProgress p = grasp_.update(in.flags, in.t);
+  const GraspProgress p = grasp_.update(in.flags, in.t, in.grip_ready);
   if (p.touch) event(EventKind::kTouch, out, "both fingertips touch", grasp_force(in.flags));
   if (p.timed_out) abort("search timed out before both fingertips touched", out);
   return p.settled;

@@ -46,7 +46,7 @@ class Search : public ::testing::TestWithParam<SearchRow> {};
 
 TEST_P(Search, TouchSettleAndTimeout) {
   const SearchRow& row = GetParam();
-  GraspSearch grasp(kTimeoutS, row.settle_s);
+  GraspSearch grasp(kTimeoutS, row.settle_s, 1.0);
   grasp.start(0);
   int touch_at = -1;
   int settled_at = -1;
@@ -73,7 +73,7 @@ INSTANTIATE_TEST_SUITE_P(
                       SearchRow{"touch_relaxing_while_settling", 0.5, "LR --", 0, 2, -1}));
 
 TEST(GraspSearch, FingerModeOfEachStage) {
-  GraspSearch grasp(kTimeoutS, 0.5);
+  GraspSearch grasp(kTimeoutS, 0.5, 1.0);
   EXPECT_EQ(grasp.finger_mode(), FingerMode::kOff);
   grasp.start(0);
   EXPECT_EQ(grasp.finger_mode(), FingerMode::kSearch);
@@ -87,7 +87,7 @@ TEST(GraspSearch, FingerModeOfEachStage) {
 }
 
 TEST(GraspSearch, ANewSearchForgetsTheTouches) {
-  GraspSearch grasp(kTimeoutS, 0.5);
+  GraspSearch grasp(kTimeoutS, 0.5, 1.0);
   grasp.start(0);
   grasp.update(touching(true, false), 0.25);
   grasp.start(1.0);
@@ -95,8 +95,31 @@ TEST(GraspSearch, ANewSearchForgetsTheTouches) {
   EXPECT_TRUE(grasp.update(touching(true, false), 1.5).touch);
 }
 
+// The margin grip's grasp: the settle ends when the grip has reached its target, and at the
+// latest reach_timeout_s after grasp_settle_s; the paper's grip is always ready.
+TEST(GraspSearch, TheSettleWaitsForTheGripUpToTheReachTimeout) {
+  struct Case {
+    const char* what;
+    double ready_from_s;  // the grip is ready from this time on
+    double settled_at_s;
+  };
+  const Case cases[] = {{"ready at the touch: the settle alone", 0.0, 0.75},
+                        {"ready later: then", 1.25, 1.25},
+                        {"never ready: the settle plus the reach timeout", 99.0, 1.75}};
+  for (const Case& c : cases) {
+    GraspSearch grasp(kTimeoutS, 0.5, 1.0);
+    grasp.start(0);
+    double settled_at = -1;
+    for (int k = 1; k <= 12 && settled_at < 0; ++k) {
+      const double t = k * kStepS;
+      if (grasp.update(touching(true, true), t, t >= c.ready_from_s).settled) settled_at = t;
+    }
+    EXPECT_EQ(settled_at, c.settled_at_s) << c.what;
+  }
+}
+
 TEST(GraspSearch, IdleUpdatesDoNothing) {
-  GraspSearch grasp(kTimeoutS, 0.5);
+  GraspSearch grasp(kTimeoutS, 0.5, 1.0);
   const GraspProgress p = grasp.update(touching(true, true), 10.0);
   EXPECT_FALSE(p.touch || p.settled || p.timed_out);
 }

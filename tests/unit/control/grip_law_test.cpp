@@ -36,7 +36,8 @@ Config steady_mu_config() {
 // `load` along y_f (gravity); `slip` raises SLIP on both.
 class Grip {
  public:
-  explicit Grip(const Config& cfg = margin_config()) : cfg_(cfg), law_(cfg) {
+  explicit Grip(const Config& cfg = margin_config(), double dt = kDt)
+      : cfg_(cfg), law_(cfg), dt_(dt) {
     for (auto& tip : elements_)
       tip.resize(1);
   }
@@ -61,12 +62,12 @@ class Grip {
     }
     flags.slip = slip;
     const GripOutput out = law_.update(flags, in, ctx, t_);
-    t_ += kDt;
+    t_ += dt_;
     return out;
   }
   // `seconds` of updates without slip.
   void hold(double seconds, GripContext ctx = {}) {
-    for (double s = 0; s < seconds; s += kDt)
+    for (double s = 0; s < seconds; s += dt_)
       step(false, ctx);
   }
   GripLaw& law() { return law_; }
@@ -77,6 +78,7 @@ class Grip {
   Config cfg_;
   GripLaw law_;
   std::array<std::vector<ElementReading>, kFingertips> elements_;
+  double dt_;
   double t_ = 0;
 };
 
@@ -105,6 +107,42 @@ TEST(GripLaw, ServoSqueezesTowardTheTargetAndNoFaster) {
                    -g.cfg().grip_servo_max_speed_mps, g.cfg().grip_servo_max_speed_mps);
     EXPECT_NEAR(out.squeeze_mps, expected, 1e-12) << c.what;
   }
+}
+
+// The speed holds for a whole update: at a longer period (a slower camera) the gain falls in
+// proportion past grip_servo_gain_period_s, so each period closes the same part of the error.
+TEST(GripLaw, TheServosGainFallsWithALongerPeriod) {
+  struct Case {
+    double dt;
+    double gain_fraction;
+  };
+  const Config cfg = margin_config();
+  const double p = cfg.grip_servo_gain_period_s;
+  const Case cases[] = {{0.002, 1.0}, {p, 1.0}, {2 * p, 0.5}, {4 * p, 0.25}};
+  for (const Case& c : cases) {
+    Grip g(cfg, c.dt);
+    g.press(0.08, 0.0);  // under the target grip_min_n (0.1 N): a small error, under the bound
+    GripOutput out = g.step();
+    for (int i = 0; i < 50; ++i)
+      out = g.step();
+    const double error = g.law().reference_n() - 0.08;
+    ASSERT_GT(error, 0.0) << c.dt;
+    EXPECT_LT(cfg.grip_servo_gain_mps_per_n * error, cfg.grip_servo_max_speed_mps) << c.dt;
+    EXPECT_NEAR(out.squeeze_mps, c.gain_fraction * cfg.grip_servo_gain_mps_per_n * error, 1e-12)
+        << c.dt;
+  }
+}
+
+// What the arm waits for before it moves a grasped object (GraspSearch's settle).
+TEST(GripLaw, ReachedOnlyWithinTheServosReachOfTheTarget) {
+  Grip g;
+  EXPECT_FALSE(g.law().reached()) << "before the first update";
+  g.press(0.02, 0.0);  // a fifth of the target grip_min_n
+  g.step();
+  EXPECT_FALSE(g.law().reached());
+  g.press(0.095, 0.0);  // 95 % of it
+  g.step();
+  EXPECT_TRUE(g.law().reached());
 }
 
 TEST(GripLaw, NoSqueezePastTheF2Bound) {

@@ -148,12 +148,24 @@ struct Config {
   // The force servo: squeeze speed per newton of error, its bound, and the rate at which the
   // servo's reference follows the target.
   double grip_servo_gain_mps_per_n = 0.02;
+  // The control period the gain is for: at a longer period (a slower camera) the gain falls in
+  // proportion, so that each frame closes the same part of the error. The speed holds for a whole
+  // period: at 30 fps the full gain closed more than the error in one frame and the grip rang
+  // (0.35-0.52 N each frame of the carry), let the lowering's start slip the cap and release it
+  // 6 cm above the bottle.
+  double grip_servo_gain_period_s = 0.0125;
   double grip_servo_max_speed_mps = 0.005;
   double grip_force_rate_nps = 20.0;
   // Feed-forward: the arm's planned acceleration (the rig's arm.max_accel_mps2 default) and how
   // long before a segment's start or stop the grip rises for it.
   double grip_ff_accel_mps2 = 0.5;
   double grip_ff_lead_s = 0.3;
+  // A grasp (either phase) moves the object only once the grip has reached its target, as a
+  // person's grip force rises before the load does; at most this long past grasp_settle_s.
+  // Only the margin grip waits: the paper's is at F1 when TOUCH comes. Without the wait, at 30 fps
+  // (the servo's gain scaled down to the period) a turn began on a grip still rising, slipped at
+  // once, and tightness was declared before the cap had turned.
+  double grip_reach_timeout_s = 1.0;
 
   // --- places (world frame, m) -------------------------------------------------------------
   double cap_x_m = 0.35;

@@ -54,6 +54,8 @@ class FingerSpeedEstimator {
 
   const std::array<Vec3, kFingertips>& velocity() const { return velocity_; }
   const GripLaw& grip_law() const { return grip_; }
+  // The paper's grip: always; the margin grip: once it has reached its target (GripLaw::reached).
+  bool grip_ready() const noexcept { return !margin_ || grip_.reached(); }
 
  private:
   double approach_speed_;

@@ -14,22 +14,28 @@ namespace tactile::control {
 // What one update of the grasp brought. TOUCH and the end of the settle come in the same update
 // when grasp_settle_s is 0.
 struct GraspProgress {
-  bool touch = false;      // both fingertips have touched: SEARCH ends (the TOUCH event)
-  bool settled = false;    // grasp_settle_s after the touch: "grasping ended"
+  bool touch = false;  // both fingertips have touched: SEARCH ends (the TOUCH event)
+  // grasp_settle_s after the touch, and the grip at its target (or grip_reach_timeout_s more):
+  // "grasping ended"
+  bool settled = false;
   bool timed_out = false;  // search_timeout_s without TOUCH on both
 };
 
 class GraspSearch {
  public:
-  GraspSearch(double search_timeout_s, double settle_s) noexcept
-      : search_timeout_s_(search_timeout_s), settle_s_(settle_s) {}
+  GraspSearch(double search_timeout_s, double settle_s, double reach_timeout_s) noexcept
+      : search_timeout_s_(search_timeout_s),
+        settle_s_(settle_s),
+        reach_timeout_s_(reach_timeout_s) {}
 
   // SEARCH from t, no fingertip touched yet.
   void start(double t) noexcept;
   // No grasp any more: a new step, or the task ended.
   void clear() noexcept { stage_ = Stage::kIdle; }
-  // After `settled` or `timed_out` the search is idle again.
-  GraspProgress update(const Flags& flags, double t) noexcept;
+  // After `settled` or `timed_out` the search is idle again. `grip_ready`: the grip has reached
+  // what the grip law asks (always true for the paper's grip): the arm does not move the object
+  // before, unless reach_timeout_s past the settle.
+  GraspProgress update(const Flags& flags, double t, bool grip_ready = true) noexcept;
 
   // kSearch while searching, kMove while settling, kOff when idle.
   FingerMode finger_mode() const;
@@ -41,6 +47,7 @@ class GraspSearch {
 
   double search_timeout_s_;
   double settle_s_;
+  double reach_timeout_s_;
   Stage stage_ = Stage::kIdle;
   double since_s_ = 0;  // the search's or the settle's start
   std::array<bool, kFingertips> touched_{};

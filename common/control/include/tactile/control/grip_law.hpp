@@ -62,6 +62,9 @@ class GripLaw {
   double mu_hat() const { return mu_hat_; }
   double weight_n() const { return weight_n_; }
   double demand_n() const { return demand_n_; }
+  // The grip is within the servo's reach of its target (90 %): what the arm waits for before it
+  // moves a grasped object (Config::grip_reach_timeout_s).
+  bool reached() const noexcept;
 
  private:
   void observe(const Flags& flags, const std::array<FingertipInput, kFingertips>& inputs,

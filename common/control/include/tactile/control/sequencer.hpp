@@ -20,6 +20,8 @@ struct StepInput {
   const Flags& flags;
   const ArmFeedback& arm;
   double t;  // task time (s): the controller's clock, frozen during stale holds
+  // The grip has reached what the grip law asks (FingerSpeedEstimator::grip_ready).
+  bool grip_ready = true;
 };
 
 struct StepOutput {
@@ -32,7 +34,7 @@ class Sequencer {
  public:
   explicit Sequencer(const Config& cfg) noexcept
       : segment_(cfg.segment_timeout_s),
-        grasp_(cfg.search_timeout_s, cfg.grasp_settle_s),
+        grasp_(cfg.search_timeout_s, cfg.grasp_settle_s, cfg.grip_reach_timeout_s),
         release_(cfg) {}
 
   // A new run: idle, nothing running, cycle 0.
@@ -78,6 +80,10 @@ class Sequencer {
   // the grasp settles (a segment that carries the object follows), or a carrying segment started
   // less than lead_s ago or has less than lead_s left at its speeds.
   bool accelerates_within(const ArmFeedback& arm, double t, double lead_s) const noexcept;
+  // The running segment started less than s ago.
+  bool segment_started_within(double t, double s) const noexcept {
+    return t - segment_.started_s() < s;
+  }
 
   Phase phase() const { return phase_; }
   std::uint32_t cycle() const { return cycle_; }
