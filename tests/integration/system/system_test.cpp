@@ -44,11 +44,15 @@ std::string slurp(const std::filesystem::path& p) {
 
 class LoopbackSystem {
  public:
-  // `rig_options`: added to the rig's command line.
-  explicit LoopbackSystem(const std::string& scenario, std::vector<std::string> rig_options = {})
+  // `rig_options`: added to the rig's command line; `scenario_options` (overrides of the
+  // scenario's keys, such as --grip) also to the one that writes the nodes' configurations.
+  explicit LoopbackSystem(const std::string& scenario, std::vector<std::string> rig_options = {},
+                          const std::vector<std::string>& scenario_options = {})
       : scenario_(scenario) {
-    const auto r = testing::run(
-        {TACTILE_RIG_PATH, "--scenario", scenario, "--write-configs", config().string()});
+    std::vector<std::string> write{TACTILE_RIG_PATH, "--scenario", scenario, "--write-configs",
+                                   config().string()};
+    write.insert(write.end(), scenario_options.begin(), scenario_options.end());
+    const auto r = testing::run(write);
     if (r.exit_code != 0) throw std::runtime_error("rig --write-configs failed: " + r.err);
     std::vector<std::string> rig{TACTILE_RIG_PATH,
                                  "--scenario",
@@ -58,6 +62,7 @@ class LoopbackSystem {
                                  "--plots",
                                  (dir_ / "plots").string()};
     rig.insert(rig.end(), rig_options.begin(), rig_options.end());
+    rig.insert(rig.end(), scenario_options.begin(), scenario_options.end());
     rig_.emplace(std::move(rig));
     start_sensor();
     start_hand();
@@ -175,10 +180,13 @@ json decisions(const json& r) {
   return d;
 }
 
-json lockstep_report(const std::string& scenario, const std::filesystem::path& dir) {
+json lockstep_report(const std::string& scenario, const std::filesystem::path& dir,
+                     const std::vector<std::string>& scenario_options = {}) {
   const auto report = dir / "lockstep-report.json";
-  const auto r = testing::run(
-      {TACTILE_RIG_PATH, "--lockstep", "--scenario", scenario, "--report", report.string()});
+  std::vector<std::string> argv{TACTILE_RIG_PATH, "--lockstep", "--scenario",
+                                scenario,         "--report",   report.string()};
+  argv.insert(argv.end(), scenario_options.begin(), scenario_options.end());
+  const auto r = testing::run(argv);
   if (r.exit_code != 0) throw std::runtime_error("rig --lockstep failed: " + r.err);
   return json::parse(slurp(report));
 }
@@ -242,6 +250,35 @@ TEST(LoopbackSystem, CompletesThePapersTask) {
   EXPECT_GT(r["machine"]["cores"].get<int>(), 0) << r.dump();
   EXPECT_TRUE(r["machine"]["explains_latency"].is_boolean()) << r.dump();
   EXPECT_NE(s.rig_result().err.find(" ms; machine: CPU steal "), std::string::npos) << logs(s);
+}
+
+// The margin grip (docs/control.md, "The margin grip") run by hand_node over real sockets, as in
+// lockstep: the rig's configuration gives hand_node the grip, the task completes without a drop
+// or OVER, the report scores the grip against the least that holds (about 5 times it, against
+// the paper grip's 25-30 on this scenario), and the run decides as the lockstep run of the same
+// file with the same grip.
+TEST(LoopbackSystem, TheMarginGripHoldsTheCapOverRealSockets) {
+  const std::vector<std::string> margin{"--grip", "margin"};
+  LoopbackSystem s(kScenario, {}, margin);
+  const json r = s.finish(150s);
+  EXPECT_FALSE(s.hand_result().timed_out) << logs(s) << "\n--- report\n" << r.dump();
+  EXPECT_EQ(s.hand_result().exit_code, 0) << logs(s);
+  EXPECT_EQ(s.rig_result().exit_code, 0) << logs(s);
+  ASSERT_TRUE(r.is_object()) << logs(s);
+  EXPECT_NE(s.hand_result().err.find("info: slip detector: learned, grip: margin\n"),
+            std::string::npos)
+      << logs(s);
+  EXPECT_EQ(r["controller"], (json{{"slip_detector", "learned"}, {"grip", "margin"}})) << r.dump();
+  EXPECT_EQ(r["completed"], true) << r.dump();
+  EXPECT_EQ(r["dropped"], false) << r.dump();
+  EXPECT_EQ(r["over_events"], 0) << r.dump();
+  EXPECT_EQ(r["release_classified"], "release") << r.dump();
+  EXPECT_EQ(r["tightened_cycle"], r["true_tight_cycle"]) << r.dump();
+  ASSERT_GT(r["grip"]["held_frames"].get<int>(), 0) << r.dump();
+  EXPECT_GT(r["grip"]["ratio_p50"].get<double>(), 1.0) << r.dump();
+  EXPECT_LT(r["grip"]["ratio_p50"].get<double>(), 12.0) << r.dump();
+  EXPECT_LT(r["grip"]["cap_slide_carry_mm"].get<double>(), 1.0) << r.dump();
+  EXPECT_EQ(decisions(r), decisions(lockstep_report(kScenario, s.dir(), margin))) << r.dump();
 }
 
 // The sweep's negative case in real time: the bottle stands away from where the controller
