@@ -166,8 +166,8 @@ struct Report {
   // never came). Absent: no key, the report as without disturbances.
   std::optional<DisturbanceParams> disturbance;
   // A fragile object (cap.crush_force_n), written as `fragile`: the crush force, whether the grip
-  // broke it and when, the largest grip applied. A broken object fails the run: `completed` and
-  // `negative_case_passed` are false. Absent: no key.
+  // broke it and when, the largest grip applied. A broken object is said here alone:
+  // `completed` and `negative_case_passed` stay the controller's decisions. Absent: no key.
   std::optional<CrushTruth> fragile;
   GripMetrics grip;
   // The controller the run scored: its slip detector and its grip (control::to_string of the
