@@ -364,10 +364,12 @@ void Renderer::draw_spot(std::size_t k, const ElementLoad& load) {
   const double cy = e.zero_px.y + uy / cal_.mm_per_px;
   if (opt_.element_model == ElementModel::kFeelers) {
     draw_feelers(k, p, cx, cy, ux, uy);
+    centroid_from_cache(k, cx, cy);
   } else {
+    // A Gaussian's light is centred on the spot: no pass over the box to find it.
     draw_gaussian(k, p, cx, cy);
+    centroid_px_[k] = Vec2{cx, cy};
   }
-  centroid_from_cache(k, cx, cy);
 }
 
 void Renderer::draw_gaussian(std::size_t k, double p, double cx, double cy) {

@@ -141,6 +141,8 @@ class Renderer {
   double strength_for_g(std::size_t k, double g) const;
   // The paper's eq. 3-4 on element k's noiseless image as last rendered: the increment-weighted
   // centroid of its disk's pixels (the spot's centre when it has no increment), image pixels.
+  // The Gaussian model gives the spot's centre, about which its light is symmetric (the feeler
+  // model only pays for the pass over the pixels).
   Vec2 noiseless_centroid_px(std::size_t k) const { return centroid_px_[k]; }
   // Spots whose noiseless pixels the last render() recomputed (their load changed).
   std::size_t redrawn_spots() const { return redrawn_; }
