@@ -241,7 +241,7 @@ std::string series_csv(const RunSeries& series) {
       o += fmt::format(",{}_{}", tip, col);
     }
   }
-  o += "\n";
+  o += ",grip_need_N,grip_applied_N,grip_held\n";
   for (const FrameSample& f : series.frames) {
     o += fmt::format("{:.3f},{},{},{},{:.4f},{:.6f},{:.5f},{:.6f},{:.5f}", f.t,
                      control::to_string(static_cast<control::Phase>(f.phase)), f.twist_cycle,
@@ -252,7 +252,7 @@ std::string series_csv(const RunSeries& series) {
                        f.fingertip_x_m[i], f.dy_mm[i], f.max_fz_measured[i], f.max_fz_true[i],
                        f.touch[i], f.slip[i], f.true_slip[i], f.over[i], f.tp[i], f.fp[i], f.fn[i]);
     }
-    o += "\n";
+    o += fmt::format(",{:.4f},{:.4f},{:d}\n", f.grip_need_n, f.grip_applied_n, f.grip_held);
   }
   return o;
 }

@@ -207,6 +207,16 @@ void RunScorer::add_truth(std::uint64_t frame, double t, const GroundTruth& gt,
   run_.series.frames.push_back(s);
 }
 
+void RunScorer::add_grip(double t, const GripTruth& grip) {
+  grip_.add(t, grip);
+  crush_.add(t, grip);
+  if (!record_ || run_.series.frames.empty()) return;
+  FrameSample& s = run_.series.frames.back();  // add_truth's sample of the same frame
+  s.grip_need_n = grip.needed_n;
+  s.grip_applied_n = *std::min_element(grip.applied_n.begin(), grip.applied_n.end());
+  s.grip_held = grip.held;
+}
+
 void RunScorer::add_measurement(std::size_t i, std::uint64_t frame,
                                 std::span<const ElementReading> readings,
                                 const FingertipTruth& truth, control::Phase phase,

@@ -243,6 +243,43 @@ TEST(Scoring, SeriesFlagsAreTheControllersFlags) {
   EXPECT_FALSE(s.over[1]);
 }
 
+// The series carries each frame's grip truth (the columns grip_need_N, grip_applied_N,
+// grip_held): the need, the smaller fingertip's grip, held; a frame without a sample (series off)
+// is left alone.
+TEST(Scoring, SeriesCarriesTheGripsTruthOfEachFrame) {
+  control::Config cfg;
+  LockstepResult run = empty_run();
+  RunScorer scorer(run, cfg, true);
+  GroundTruth gt;
+  GripTruth g;
+  g.needed_n = 0.25;
+  g.applied_n = {0.9, 0.7};
+  g.held = true;
+  scorer.add_truth(1, 0.01, gt, {control::Phase::kTransport, 0}, {});
+  scorer.add_grip(0.01, g);
+  scorer.add_truth(2, 0.02, gt, {control::Phase::kLower, 0}, {});
+  g.held = false;
+  g.applied_n = {0.4, 0.6};
+  scorer.add_grip(0.02, g);
+  ASSERT_EQ(run.series.frames.size(), 2U);
+  EXPECT_EQ(run.series.frames[0].grip_need_n, 0.25);
+  EXPECT_EQ(run.series.frames[0].grip_applied_n, 0.7);
+  EXPECT_TRUE(run.series.frames[0].grip_held);
+  EXPECT_EQ(run.series.frames[1].grip_applied_n, 0.4);
+  EXPECT_FALSE(run.series.frames[1].grip_held);
+  const std::string csv = series_csv(run.series);
+  const std::string header = csv.substr(0, csv.find('\n'));
+  EXPECT_TRUE(header.ends_with(",grip_need_N,grip_applied_N,grip_held")) << header;
+  EXPECT_NE(csv.find(",0.2500,0.7000,1\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",0.2500,0.4000,0\n"), std::string::npos) << csv;
+
+  LockstepResult quiet = empty_run();
+  RunScorer off(quiet, cfg, false);
+  off.add_truth(1, 0.01, gt, {control::Phase::kTransport, 0}, {});
+  off.add_grip(0.01, g);
+  EXPECT_TRUE(quiet.series.frames.empty());
+}
+
 // The incipient lead (docs/slip.md, "The incipient lead"): on fingertip 0, twelve elements in
 // contact; partial slip (3 of 12 sliding) before gross slip (10 of 12) makes an episode, and the
 // run's detector (the paper's rule) leads by the frames from its first slipping element in the

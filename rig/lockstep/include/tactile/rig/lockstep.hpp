@@ -209,6 +209,11 @@ struct FrameSample {
   double wrist_yaw_rad = 0;
   // Element-frames of this frame scored as true positive, false positive, false negative.
   std::array<std::uint16_t, kFingertips> tp{}, fp{}, fn{};
+  // The grip's truth (GripTruth): the least grip that holds the cap now, the grip applied (the
+  // smaller fingertip's total normal force), and whether the fingers alone hold the cap.
+  double grip_need_n = 0;
+  double grip_applied_n = 0;
+  bool grip_held = false;
 };
 
 struct EventRecord {

@@ -108,10 +108,7 @@ class RunScorer {
   void add_truth(std::uint64_t frame, double t, const GroundTruth& truth,
                  const ControllerState& controller, const FramePose& pose);
   // The grip's truth of the same frame, at `t` (the report's `grip`, and `fragile`).
-  void add_grip(double t, const GripTruth& grip) {
-    grip_.add(t, grip);
-    crush_.add(t, grip);
-  }
+  void add_grip(double t, const GripTruth& grip);
   // The object breaks under a grip above `crush_force_n` (cap.crush_force_n; 0: not fragile,
   // the report has no `fragile`).
   void score_crush(double crush_force_n) { crush_.crush_force_n = crush_force_n; }
