@@ -71,13 +71,14 @@ void load_rows(const std::vector<std::string>& files, rig::train::TrainingRows& 
       from.assign(runs.size(), "");
     } else if (part.seeds != shared.seeds || part.scenarios != shared.scenarios ||
                part.max_time_s != shared.max_time_s || part.controller != shared.controller ||
-               part.features != shared.features || part.shards != shared.shards) {
+               part.grip != shared.grip || part.features != shared.features ||
+               part.shards != shared.shards) {
       throw std::runtime_error(fmt::format(
-          "{}: seeds {}, {} scenarios, max time {}, controller {}, {} shards; {} has seeds {}, {}, "
-          "{}, {}, {}: not shards of one training",
+          "{}: seeds {}, {} scenarios, max time {}, controller {}, grip {}, {} shards; {} has "
+          "seeds {}, {}, {}, {}, {}, {}: not shards of one training",
           files[f], fmt::join(part.seeds, ","), part.scenarios, part.max_time_s, part.controller,
-          part.shards, files[0], fmt::join(shared.seeds, ","), shared.scenarios, shared.max_time_s,
-          shared.controller, shared.shards));
+          part.grip, part.shards, files[0], fmt::join(shared.seeds, ","), shared.scenarios,
+          shared.max_time_s, shared.controller, shared.grip, shared.shards));
     }
     if (part.features != control::kSlipFeatures) {
       throw std::runtime_error(fmt::format("{}: rows of {} features; this slip_train has {}",
@@ -132,6 +133,7 @@ int main(int argc, char** argv) {
   double max_time_s = 0;
   std::optional<double> decision_level;
   std::string controller = "field";
+  std::string grip = "paper";
   rig::train::BoostParams params;
   params.trees = 64;
   params.depth = 7;
@@ -185,6 +187,12 @@ int main(int argc, char** argv) {
                  "runs it is trained on, as they steer the sweep's)")
       ->check(CLI::IsMember({"field", "learned"}))
       ->capture_default_str();
+  app.add_option("--grip", grip,
+                 "the grip of the training runs: paper (the paper's F1 and re-compression), "
+                 "margin (docs/control.md, \"The margin grip\"), or mixed (each seed's odd "
+                 "scenarios under the margin grip, the even under the paper's)")
+      ->check(CLI::IsMember({"paper", "margin", "mixed"}))
+      ->capture_default_str();
   std::string shard;
   std::string rows_out;
   std::vector<std::string> rows_in;
@@ -197,7 +205,7 @@ int main(int argc, char** argv) {
   auto* rows_in_opt =
       app.add_option("--rows-in", rows_in,
                      "fit from these rows files (every shard's --rows-out) instead of running; "
-                     "the seeds, scenarios, max time and controller are theirs")
+                     "the seeds, scenarios, max time, controller and grip are theirs")
           ->excludes(rows_out_opt);
   tactile::cli::add_log_level(app, log_level);
   return tactile::cli::run(app, argc, argv, [&] {
@@ -209,6 +217,7 @@ int main(int argc, char** argv) {
     shared.scenarios = scenarios;
     shared.max_time_s = max_time_s;
     shared.controller = controller;
+    shared.grip = grip;
     shared.features = control::kSlipFeatures;
     if (!shard.empty()) {
       if (!*rows_out_opt) throw tactile::cli::UsageError("--shard needs --rows-out");
@@ -223,7 +232,7 @@ int main(int argc, char** argv) {
     std::vector<Run> runs;
     std::vector<std::uint64_t> selected;
     if (*rows_in_opt) {
-      for (const char* name : {"--seeds", "--scenarios", "--max-time", "--controller"}) {
+      for (const char* name : {"--seeds", "--scenarios", "--max-time", "--controller", "--grip"}) {
         if (app.count(name) > 0)
           throw tactile::cli::UsageError(std::string("--rows-in takes no ") + name +
                                          ": the rows files say how they were made");
@@ -233,6 +242,7 @@ int main(int argc, char** argv) {
       scenarios = shared.scenarios;
       max_time_s = shared.max_time_s;
       controller = shared.controller;
+      grip = shared.grip;
     } else {
       for (const std::uint64_t s : seeds)
         for (std::uint64_t i = 0; i < scenarios; ++i)
@@ -251,6 +261,7 @@ int main(int argc, char** argv) {
               rig::parse_scenario(rig::sweep::scenario_yaml(d, max_time_s),
                                   fmt::format("seed {} scenario {}", r.seed, r.index));
           sc.slip_detector = controller;
+          sc.grip = grip == "mixed" ? (r.index % 2 == 1 ? "margin" : "paper") : grip;
           rig::LockstepOptions opt;
           opt.record_series = false;
           opt.slip_features = &r.log;
@@ -367,10 +378,11 @@ int main(int argc, char** argv) {
       decision = *decision_level;
     }
     const std::string training = fmt::format(
-        "slip_train --seeds {} --scenarios {} --trees {} --depth {} --learning-rate {}{}{}{}: {} "
-        "rows, decision {:.2f}",
+        "slip_train --seeds {} --scenarios {} --trees {} --depth {} --learning-rate {}{}{}{}{}: "
+        "{} rows, decision {:.2f}",
         fmt::join(seeds, ","), scenarios, params.trees, params.depth, params.learning_rate,
         controller != "field" ? fmt::format(" --controller {}", controller) : std::string(),
+        grip != "paper" ? fmt::format(" --grip {}", grip) : std::string(),
         max_time_s > 0 ? fmt::format(" --max-time {}", max_time_s) : std::string(),
         decision_level ? fmt::format(" --decision {}", *decision_level) : std::string(),
         label.size(), decision);

@@ -58,6 +58,7 @@ std::string rows_file(const TrainingRows& rows) {
                                          {"scenarios", rows.scenarios},
                                          {"max_time_s", rows.max_time_s},
                                          {"controller", rows.controller},
+                                         {"grip", rows.grip},
                                          {"features", rows.features},
                                          {"shard", rows.shard},
                                          {"shards", rows.shards},
@@ -95,6 +96,7 @@ TrainingRows parse_rows_file(std::string_view bytes, const std::string& source) 
     rows.scenarios = h.at("scenarios").get<std::uint64_t>();
     rows.max_time_s = h.at("max_time_s").get<double>();
     rows.controller = h.at("controller").get<std::string>();
+    rows.grip = h.value("grip", std::string("paper"));
     rows.features = h.at("features").get<std::size_t>();
     rows.shard = h.at("shard").get<int>();
     rows.shards = h.at("shards").get<int>();

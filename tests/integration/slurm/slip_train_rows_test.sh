@@ -36,6 +36,16 @@ refused 1 "2 of 4 runs missing, the first seed 5 scenario 1" --rows-in "$tmp/sha
 refused 1 "seed 5 scenario 0 is in $tmp/shard-1.rows too" --rows-in "$tmp/shard-1.rows" "$tmp/shard-1.rows"
 "$slip_train" --seeds 5 --scenarios 1 --max-time 6 --shard 1/1 --rows-out "$tmp/other.rows" 2>/dev/null
 refused 1 "not shards of one training" --rows-in "$tmp/shard-1.rows" "$tmp/other.rows"
+# --grip mixed: shard 2 of 2 holds scenario 1 of each seed, an odd one, so run under the margin
+# grip: other rows than the paper grip's shard, and not a shard of the paper grip's training.
+"$slip_train" "${runs[@]}" --grip mixed --shard 2/2 --rows-out "$tmp/mixed.rows" 2>"$tmp/mixed.log" ||
+  fail "mixed shard: $(tail -n 3 "$tmp/mixed.log")"
+head -n 1 "$tmp/mixed.rows" | grep -qF '"grip":"mixed"' || fail "no grip in the rows header: $(head -n 1 "$tmp/mixed.rows")"
+head -n 1 "$tmp/shard-2.rows" | grep -qF '"grip":"paper"' || fail "no paper grip in the header: $(head -n 1 "$tmp/shard-2.rows")"
+cmp -s <(tail -n +2 "$tmp/mixed.rows") <(tail -n +2 "$tmp/shard-2.rows") &&
+  fail "the margin grip's runs logged the paper grip's rows"
+refused 1 "grip mixed" --rows-in "$tmp/shard-1.rows" "$tmp/mixed.rows"
+refused 2 "--rows-in takes no --grip" --rows-in "$tmp/shard-1.rows" --grip margin
 head -c 200 "$tmp/shard-2.rows" >"$tmp/cut.rows"
 refused 1 "cut.rows: the file ends within a run's rows" --rows-in "$tmp/shard-1.rows" "$tmp/cut.rows"
 refused 2 "--rows-in takes no --seeds" --rows-in "$tmp/shard-1.rows" --seeds 5,6

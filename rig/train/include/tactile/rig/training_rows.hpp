@@ -29,6 +29,9 @@ struct TrainingRows {
   std::uint64_t scenarios = 0;  // per seed
   double max_time_s = 0;
   std::string controller;
+  // The grip of the training runs: paper, margin, or mixed (the odd scenarios of each seed under
+  // the margin grip, the even under the paper's). Files without the key were made with paper.
+  std::string grip = "paper";
   std::size_t features = 0;
   int shard = 1;  // K of shards
   int shards = 1;
