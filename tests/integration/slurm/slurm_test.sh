@@ -167,7 +167,7 @@ cmp "$work/whole/summary.md" "$work/killed/merged/summary.md" || fail "after the
 say "shard $killed killed mid-run, found and resumed: still the same table"
 
 # --- the training -------------------------------------------------------------------------------
-train=(--scenarios 2 --max-time 6 --trees 4 --depth 3)
+train=(--scenarios 2 --max-time 6 --grip mixed --trees 4 --depth 3)
 "$slip_train" --seeds 5,6 "${train[@]}" --jobs 2 --out "$work/whole.inc" 2>"$work/train-whole.log" ||
   fail "slip_train on one machine failed: $(tail -n 3 "$work/train-whole.log")"
 # Shard 2 of 3 (run 1 of 4) killed with SIGKILL while slip_train runs, as the kernel's OOM
