@@ -68,6 +68,7 @@ bool paper_slip(const ElementReading& r, double threshold_mm) noexcept {
 
 SlipDetector::SlipDetector(SlipDetectorKind kind, const Config& cfg)
     : kind_(kind),
+      grip_(cfg.grip),
       field_{cfg.field_partial_slip_ratio, cfg.field_edge_ratio,    cfg.field_drop_ratio,
              cfg.field_min_fz_n,           cfg.field_arm_speed_mps, cfg.field_arm_yaw_rate_rps},
       mu_initial_(cfg.field_mu_initial) {
@@ -217,13 +218,14 @@ void SlipDetector::decide_field(std::size_t f, const FingertipInput& in, double 
 
 void SlipDetector::decide_learned(std::size_t f, std::size_t count, double thr, bool contact_moves,
                                   FingertipSlip& out) noexcept {
-  if (model().trees() == 0) return;
+  const ObliviousForest& forest = model(grip_);
+  if (forest.trees() == 0) return;
   const SlipColumns& columns = columns_[f];
   std::size_t n = 0;
   for (std::size_t i = 0; i < count; ++i)
     n += has_features_[f][i] ? 1 : 0;
-  model().score_columns(columns, n, score_);
-  const auto decision = static_cast<float>(model_decision());
+  forest.score_columns(columns, n, score_);
+  const auto decision = static_cast<float>(model_decision(grip_));
   const auto& moved = columns[column(SlipSignal::kMovedDr)];
   const auto& departed = columns[column(SlipSignal::kDepartedDr)];
   const auto& surface = columns[column(SlipSignal::kSurfaceDr)];

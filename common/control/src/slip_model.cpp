@@ -9,12 +9,22 @@ namespace tactile::control {
 
 namespace {
 
-// The compiled-in model of the learned detector (slip_train writes it).
+// The compiled-in models of the learned detector (slip_train writes them): one trained under the
+// paper's grip, one on light contacts too, for the margin grip (docs/slip.md, "One model per
+// grip").
+namespace paper_grip {
 #include "slip_model.inc"
+}  // namespace paper_grip
+namespace margin_grip {
+#include "slip_model_margin.inc"
+}  // namespace margin_grip
 
-static_assert(kSlipModel.features == kSlipFeatures,
-              "slip_model.inc was trained on another feature set: run slip_train again");
-static_assert(kSlipModel.depth >= 1 && kSlipModel.depth <= 8, "slip_train fits depths 1 to 8");
+static_assert(paper_grip::kSlipModel.features == kSlipFeatures &&
+                  margin_grip::kSlipModel.features == kSlipFeatures,
+              "a slip model was trained on another feature set: run slip_train again");
+static_assert(paper_grip::kSlipModel.depth >= 1 && paper_grip::kSlipModel.depth <= 8 &&
+                  margin_grip::kSlipModel.depth >= 1 && margin_grip::kSlipModel.depth <= 8,
+              "slip_train fits depths 1 to 8");
 
 template <typename T, std::size_t N>
 std::vector<T> as_vector(const T (&a)[N], std::size_t n) {
@@ -22,19 +32,31 @@ std::vector<T> as_vector(const T (&a)[N], std::size_t n) {
 }
 
 // Built at start-up, before the first frame; its scoring allocates nothing.
-const ObliviousForest kModel(kSlipModel.features, kSlipModel.depth, kSlipModel.base,
-                             as_vector(kSlipModelFeature, kSlipModel.trees* kSlipModel.depth),
-                             as_vector(kSlipModelThreshold, kSlipModel.trees* kSlipModel.depth),
-                             as_vector(kSlipModelLeaf, kSlipModel.trees << kSlipModel.depth));
+template <typename Info, std::size_t F, std::size_t T, std::size_t L>
+ObliviousForest build(const Info& info, const std::uint8_t (&feature)[F],
+                      const float (&threshold)[T], const float (&leaf)[L]) {
+  return ObliviousForest(
+      info.features, info.depth, info.base, as_vector(feature, info.trees * info.depth),
+      as_vector(threshold, info.trees * info.depth), as_vector(leaf, info.trees << info.depth));
+}
+
+const ObliviousForest kPaperModel =
+    build(paper_grip::kSlipModel, paper_grip::kSlipModelFeature, paper_grip::kSlipModelThreshold,
+          paper_grip::kSlipModelLeaf);
+const ObliviousForest kMarginModel =
+    build(margin_grip::kSlipModel, margin_grip::kSlipModelFeature, margin_grip::kSlipModelThreshold,
+          margin_grip::kSlipModelLeaf);
 
 }  // namespace
 
-const ObliviousForest& SlipDetector::model() noexcept {
-  return kModel;
+const ObliviousForest& SlipDetector::model(GripKind grip) noexcept {
+  return grip == GripKind::kMargin ? kMarginModel : kPaperModel;
 }
 
-double SlipDetector::model_decision() noexcept {
-  return static_cast<double>(static_cast<float>(kSlipModel.decision));
+double SlipDetector::model_decision(GripKind grip) noexcept {
+  const double level = grip == GripKind::kMargin ? margin_grip::kSlipModel.decision
+                                                 : paper_grip::kSlipModel.decision;
+  return static_cast<double>(static_cast<float>(level));
 }
 
 }  // namespace tactile::control

@@ -287,12 +287,21 @@ TEST(LearnedDetector, ATrainedModelIsCompiledIn) {
   EXPECT_STREQ(to_string(SlipSignal::kFieldReasons), "field_reasons");
   EXPECT_STREQ(kSlipFeatureNames[column(SlipSignal::kShareSlippingPrev)], "share_slipping_prev");
   EXPECT_GT(SlipDetector::model().trees(), 0U) << "slip_model.inc holds no trees: run slip_train";
+  EXPECT_GT(SlipDetector::model(GripKind::kMargin).trees(), 0U)
+      << "slip_model_margin.inc holds no trees: run slip_train --grip mixed";
+  EXPECT_EQ(&SlipDetector::model(), &SlipDetector::model(GripKind::kPaper));
+  EXPECT_NE(&SlipDetector::model(GripKind::kMargin), &SlipDetector::model(GripKind::kPaper));
   EXPECT_EQ(slip_detector_from_string("learned"), SlipDetectorKind::kLearned);
   EXPECT_STREQ(to_string(SlipDetectorKind::kLearned), "learned");
 }
 
-TEST(LearnedDetector, DecidesEachElementByTheModelsScore) {
-  SlipDetector det(learned_config());
+// Each grip's detector by its own model (docs/slip.md, "One model per grip").
+class LearnedDetectorOfGrip : public ::testing::TestWithParam<GripKind> {};
+
+TEST_P(LearnedDetectorOfGrip, DecidesEachElementByTheModelsScore) {
+  Config cfg = learned_config();
+  cfg.grip = GetParam();
+  SlipDetector det(cfg);
   SlipDetector field(field_config());  // fed the same frames: its rules are among the signals
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -315,8 +324,8 @@ TEST(LearnedDetector, DecidesEachElementByTheModelsScore) {
           << "frame " << frame << " element " << i;
       for (float v : x)
         ASSERT_TRUE(std::isfinite(v));
-      const bool model =
-          SlipDetector::model().score(x) > static_cast<float>(SlipDetector::model_decision());
+      const bool model = SlipDetector::model(cfg.grip).score(x) >
+                         static_cast<float>(SlipDetector::model_decision(cfg.grip));
       ASSERT_EQ(slipping(s.state[i]), model) << "frame " << frame << " element " << i;
       ASSERT_EQ(s.reasons[i] != 0, model);
       ++decided;
@@ -327,6 +336,10 @@ TEST(LearnedDetector, DecidesEachElementByTheModelsScore) {
   EXPECT_GT(slipped, 0U);
   EXPECT_LT(slipped, decided);
 }
+
+INSTANTIATE_TEST_SUITE_P(Grips, LearnedDetectorOfGrip,
+                         ::testing::Values(GripKind::kPaper, GripKind::kMargin),
+                         [](const auto& p) { return std::string(to_string(p.param)); });
 
 // An element without contact or without a displacement has no signals and does not slip.
 TEST(LearnedDetector, NoSignalsWithoutADisplacement) {
@@ -354,8 +367,10 @@ TEST(LearnedDetector, FiniteOnEveryInput) {
 // and NaN among them.
 TEST(LearnedDetector, EveryScoringPathGivesTheModelsScoresExactly) {
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-  EXPECT_STREQ(SlipDetector::model().vector_scoring(),
-               __builtin_cpu_supports("avx2") ? "avx2" : "portable");
+  for (const GripKind grip : {GripKind::kPaper, GripKind::kMargin}) {
+    EXPECT_STREQ(SlipDetector::model(grip).vector_scoring(),
+                 __builtin_cpu_supports("avx2") ? "avx2" : "portable");
+  }
 #endif
   std::mt19937_64 rng(11);
   std::normal_distribution<float> normal(0.0f, 1.0f);
@@ -378,29 +393,33 @@ TEST(LearnedDetector, EveryScoringPathGivesTheModelsScoresExactly) {
     }
   };
   std::size_t compared = 0;
-  for (int draw = 0; draw < 40; ++draw) {
-    SlipColumns columns{};
-    for (auto& column : columns)
-      for (float& v : column)
-        v = value();
-    for (std::size_t n : {0, 1, 7, 8, 9, 31, 32, 33, 41, 63, 64}) {
-      std::array<float, kMaxSlipElements> vector{}, portable{};
-      SlipDetector::model().score_columns(columns, n, vector, ModelScoring::kVector);
-      SlipDetector::model().score_columns(columns, n, portable, ModelScoring::kPortable);
-      for (std::size_t e = 0; e < n; ++e) {
-        SlipFeatures x{};
-        for (std::size_t k = 0; k < kSlipFeatures; ++k)
-          x[k] = columns[k][e];
-        const float expected = SlipDetector::model().score(x);
-        ASSERT_EQ(std::bit_cast<std::uint32_t>(vector[e]), std::bit_cast<std::uint32_t>(expected))
-            << "draw " << draw << ", " << n << " elements, element " << e;
-        ASSERT_EQ(std::bit_cast<std::uint32_t>(portable[e]), std::bit_cast<std::uint32_t>(expected))
-            << "draw " << draw << ", " << n << " elements, element " << e;
-        ++compared;
+  for (const GripKind grip : {GripKind::kPaper, GripKind::kMargin}) {
+    const ObliviousForest& forest = SlipDetector::model(grip);
+    for (int draw = 0; draw < 40; ++draw) {
+      SlipColumns columns{};
+      for (auto& column : columns)
+        for (float& v : column)
+          v = value();
+      for (std::size_t n : {0, 1, 7, 8, 9, 31, 32, 33, 41, 63, 64}) {
+        std::array<float, kMaxSlipElements> vector{}, portable{};
+        forest.score_columns(columns, n, vector, ModelScoring::kVector);
+        forest.score_columns(columns, n, portable, ModelScoring::kPortable);
+        for (std::size_t e = 0; e < n; ++e) {
+          SlipFeatures x{};
+          for (std::size_t k = 0; k < kSlipFeatures; ++k)
+            x[k] = columns[k][e];
+          const float expected = forest.score(x);
+          ASSERT_EQ(std::bit_cast<std::uint32_t>(vector[e]), std::bit_cast<std::uint32_t>(expected))
+              << to_string(grip) << ", draw " << draw << ", " << n << " elements, element " << e;
+          ASSERT_EQ(std::bit_cast<std::uint32_t>(portable[e]),
+                    std::bit_cast<std::uint32_t>(expected))
+              << to_string(grip) << ", draw " << draw << ", " << n << " elements, element " << e;
+          ++compared;
+        }
       }
     }
   }
-  EXPECT_EQ(compared, 40U * (1 + 7 + 8 + 9 + 31 + 32 + 33 + 41 + 63 + 64));
+  EXPECT_EQ(compared, 2 * 40U * (1 + 7 + 8 + 9 + 31 + 32 + 33 + 41 + 63 + 64));
 }
 
 }  // namespace

@@ -11,8 +11,9 @@
 //   the contact's shear does not follow. Per element a state (stick, incipient, slip) with a
 //   slip velocity. No friction coefficient is configured.
 // learned: the field detector's signals (SlipSignal, slip_signals.hpp) for each element through a
-//   small boosted-tree model (ObliviousForest) compiled in (slip_model.inc, written by slip_train
-//   from sweeps of seeds other than the benchmark's): an element slips when the model's score
+//   small boosted-tree model (ObliviousForest) compiled in (slip_model.inc, and
+//   slip_model_margin.inc for the margin grip; written by slip_train from sweeps of seeds other
+//   than the benchmark's): an element slips when the model's score
 //   exceeds its decision level. The history, the friction estimate and the states' gross/incipient
 //   split stay the field detector's, so the signals do not depend on the model.
 //
@@ -137,10 +138,12 @@ class SlipDetector {
     return has_features_[fingertip];
   }
   SlipFeatures features(std::size_t fingertip, std::size_t element) const noexcept;
-  // The compiled-in model (slip_model.inc; no trees: learned decides as field) and its decision
-  // level: the learned detector decides slip when the model's score exceeds it.
-  static const ObliviousForest& model() noexcept;
-  static double model_decision() noexcept;
+  // The compiled-in model for a grip (slip_model.inc for the paper's, slip_model_margin.inc for
+  // the margin grip's light contacts; no trees: learned decides as field) and its decision
+  // level: the learned detector decides slip when the model's score exceeds it. A detector uses
+  // its Config::grip's.
+  static const ObliviousForest& model(GripKind grip = GripKind::kPaper) noexcept;
+  static double model_decision(GripKind grip = GripKind::kPaper) noexcept;
 
  private:
   void decide_paper(const FingertipInput& in, double threshold_mm, FingertipSlip& out) noexcept;
@@ -156,6 +159,7 @@ class SlipDetector {
   double frame_period_s(std::size_t f, std::int64_t camera_timestamp_ns) noexcept;
 
   SlipDetectorKind kind_;
+  GripKind grip_;  // the model's
   FieldParams field_;
   double mu_initial_;
   std::array<std::array<ElementHistory, kMaxSlipElements>, kFingertips> history_{};
