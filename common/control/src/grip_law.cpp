@@ -34,6 +34,8 @@ void GripLaw::reset() noexcept {
   ref_n_ = 0;
   peak_n_.fill(0);
   twisting_ = false;
+  weighed_ = false;
+  carried_s_ = 0;
 }
 
 // The latest fresh frame of each fingertip: its tangential load, its total normal force, the
@@ -66,6 +68,8 @@ void GripLaw::observe(const Flags& flags, const std::array<FingertipInput, kFing
   const double load_sum = load_n_[0] + load_n_[1];
   if (ctx.carrying && !ctx.twist) {
     weight_n_ += std::min(1.0, dt / cfg_.grip_load_window_s) * (load_sum - weight_n_);
+    if (!ctx.accelerates_soon) carried_s_ += dt;
+    weighed_ = weighed_ || carried_s_ >= cfg_.grip_load_window_s;
   }
   const bool turning = ctx.twist && !ctx.accelerates_soon;
   if (turning && !twisting_) twist_load_n_ = 0;
@@ -84,8 +88,10 @@ double GripLaw::demand(const GripContext& ctx) const noexcept {
   }
   const double margin = ctx.twist ? cfg_.grip_twist_margin : cfg_.grip_margin;
   // Until the lift has weighed the object, a grip that lifts what the hand is meant for: a slip
-  // through the whole lift reads as an object held from below (docs/slip.md).
-  const double least = ctx.lifting ? cfg_.grip_lift_n : cfg_.grip_min_n;
+  // through the whole lift reads as an object held from below (docs/slip.md). Weighed: carried
+  // grip_load_window_s past the lift's planned acceleration (the load held over that window is
+  // then the weight and the vibration's peak).
+  const double least = ctx.lifting && !weighed_ ? cfg_.grip_lift_n : cfg_.grip_min_n;
   return std::clamp(finite_or(load / mu_hat_ * (1.0 + margin), kMaxTargetN), least, kMaxTargetN);
 }
 
@@ -122,10 +128,12 @@ void GripLaw::follow_slip(const Flags& flags, const GripContext& ctx, double now
   mu_hat_ = std::clamp(std::max(mu_hat_, ratio_peak_), cfg_.grip_mu_min, cfg_.grip_mu_max);
   if (reached) {
     // A grip already past a raise of the demand did not slip for want of force (the arm's start
-    // or stop shakes a firm grip too): it stops relaxing there.
+    // or stop shakes a firm grip too): it stops relaxing, its target held (at least the demand).
+    // Not raised to the grip measured: that swings with the arm's vibration, and false slips at
+    // its peaks would ratchet the target up by the swing each time.
     const double step = 1.0 + cfg_.grip_slip_step;
-    const double raised =
-        grip_n_ <= demand_n_ * step ? std::max(demand_n_, grip_n_) * step : grip_n_;
+    const double raised = grip_n_ <= demand_n_ * step ? std::max(demand_n_, grip_n_) * step
+                                                      : std::max(demand_n_, target_n_);
     target_n_ = std::min(std::max(target_n_, raised), kMaxTargetN);
   }
 }
@@ -191,6 +199,12 @@ GripOutput GripLaw::update(const Flags& flags,
       cfg_.grip_servo_gain_mps_per_n * std::min(1.0, cfg_.grip_servo_gain_period_s / period_s);
   double v = std::clamp(gain * (ref_n_ - grip_n_), -cfg_.grip_servo_max_speed_mps,
                         cfg_.grip_servo_max_speed_mps);
+  // A re-compression: short of the target within recompress_duration_s of a slip, the servo
+  // squeezes at its full speed (a slipping object leaves in a few tens of milliseconds; the
+  // servo's own time constant is about as long).
+  if (slipped_ && now_s - last_slip_s_ <= cfg_.recompress_duration_s && grip_n_ < ref_n_) {
+    v = cfg_.grip_servo_max_speed_mps;
+  }
   // F2 bounds the squeeze: no element past recompress_max_f2_fraction of it.
   const double limit_n = cfg_.recompress_max_f2_fraction * cfg_.f2_n;
   for (const FingertipFlags& ff : flags.fingertip) {

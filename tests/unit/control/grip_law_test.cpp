@@ -258,12 +258,86 @@ TEST(GripLaw, TargetRaisedAtOnceOnSlipAndRelaxedAfterASafeWhile) {
 
 TEST(GripLaw, AFirmGripThatSlipsStopsRelaxingWhereItIs) {
   Grip g;
-  g.press(0.6, 0.1);  // demand 0.25 N: a raise of it (0.325 N) is under the grip
+  g.press(0.3, 0.1);  // demand 0.25 N; the slip raises the target to 0.39 N
   g.step();
   g.step(true);
-  EXPECT_NEAR(g.law().target_n(), 0.6, 1e-12);
+  g.press(0.39, 0.1);
+  g.hold(1.5);  // relaxing toward the demand
+  const double relaxing = g.law().target_n();
+  ASSERT_LT(relaxing, 0.39);
+  g.press(1.3 * relaxing, 0.1);  // a grip past a raise of the demand, and past the target
+  GripContext shaken;            // the arm's start: the friction estimate stays, so does the demand
+  shaken.accelerates_soon = true;
+  g.step(true, shaken);
+  EXPECT_NEAR(g.law().target_n(), std::max(relaxing, g.law().demand_n()), 1e-12)
+      << "the target holds: not raised to the grip measured";
+  const double held = g.law().target_n();
   g.hold(0.9 * g.cfg().grip_safe_s);
-  EXPECT_NEAR(g.law().target_n(), 0.6, 1e-12) << "held through the safe while";
+  EXPECT_NEAR(g.law().target_n(), held, 1e-12) << "held through the safe while";
+}
+
+// The grip measured swings with the arm's vibration; slips (false ones too) at its peaks do not
+// ratchet the target up by the swing: before, each took the target to the grip's peak.
+TEST(GripLaw, SlipsAtTheVibrationsPeaksDoNotRatchetTheTarget) {
+  Grip g;
+  g.press(0.6, 0.1);
+  g.step();
+  for (int i = 0; i < 20; ++i) {
+    g.press(i % 2 == 0 ? 0.66 : 0.54, 0.1);  // +-10 % around 0.6 N
+    g.step(true);
+  }
+  EXPECT_NEAR(g.law().target_n(), g.law().demand_n(), 1e-12);
+  EXPECT_LT(g.law().target_n(), 0.54) << "under every grip measured";
+}
+
+// The lift's floor grip_lift_n holds until the lift has weighed the object: carried
+// grip_load_window_s past its planned acceleration; then the demand is the load's. A new grasp
+// has its floor again.
+TEST(GripLaw, TheLiftsFloorLastsUntilTheLiftHasWeighedTheObject) {
+  Grip g{steady_mu_config()};
+  GripContext grasp;
+  grasp.lifting = true;
+  GripContext lift = grasp;
+  lift.carrying = true;
+  GripContext lift_start = lift;
+  lift_start.accelerates_soon = true;
+  const double carried = 0.05 / 0.5 * 1.25;  // each fingertip carries 0.05 N
+  g.press(1.0, 0.05);
+  g.hold(1.0, grasp);
+  EXPECT_EQ(g.law().demand_n(), g.cfg().grip_lift_n) << "grasping";
+  g.hold(1.0, lift_start);
+  EXPECT_GE(g.law().demand_n(), g.cfg().grip_lift_n) << "the lift's acceleration does not weigh";
+  g.hold(0.5 * g.cfg().grip_load_window_s, lift);
+  EXPECT_EQ(g.law().demand_n(), g.cfg().grip_lift_n) << "half the window carried";
+  g.hold(0.6 * g.cfg().grip_load_window_s, lift);
+  EXPECT_NEAR(g.law().demand_n(), carried, 1e-9) << "weighed";
+  g.law().reset();
+  g.step(false, grasp);
+  EXPECT_EQ(g.law().demand_n(), g.cfg().grip_lift_n) << "a new grasp";
+}
+
+// A slip short of the target: the servo squeezes at its full speed for recompress_duration_s
+// after the slip, then by its gain again.
+TEST(GripLaw, ASlipShortOfTheTargetSqueezesAtFullSpeed) {
+  Grip g;
+  g.press(0.5, 0.16);  // demand 0.4 N; the slip raises the target to 0.65 N
+  g.step();
+  const GripOutput slip = g.step(true);
+  ASSERT_NEAR(g.law().target_n(), 0.65, 1e-12);
+  const double full = g.cfg().grip_servo_max_speed_mps;
+  const double by_gain = g.cfg().grip_servo_gain_mps_per_n * (0.65 - 0.5);
+  ASSERT_LT(by_gain, full);
+  EXPECT_EQ(slip.squeeze_mps, full);
+  const double slip_t = g.t() - kDt;
+  GripOutput out = g.step();
+  EXPECT_EQ(out.squeeze_mps, full) << "within recompress_duration_s";
+  while (g.t() <= slip_t + g.cfg().recompress_duration_s + 1e-9)
+    out = g.step();
+  out = g.step();
+  EXPECT_NEAR(out.squeeze_mps, g.cfg().grip_servo_gain_mps_per_n * (g.law().target_n() - 0.5),
+              1e-12)
+      << "by the gain after it";
+  EXPECT_LT(out.squeeze_mps, full);
 }
 
 TEST(GripLaw, DemandIsTheLoadOverTheFrictionEstimateWithTheMargin) {

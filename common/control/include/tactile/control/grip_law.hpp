@@ -98,6 +98,10 @@ class GripLaw {
   double last_now_s_ = 0;
   double last_slip_s_ = 0;
   bool twisting_ = false;  // the previous update was in a turn
+  // Carried this long past the lift's planned acceleration; weighed once that is
+  // grip_load_window_s: the lift's floor grip_lift_n is then no longer needed.
+  double carried_s_ = 0;
+  bool weighed_ = false;
 };
 
 }  // namespace tactile::control
