@@ -174,7 +174,7 @@ ControllerOutput GraspMoveTwistController::update(const ControllerInput& in) noe
       stale_held_s_ = 0;
       event(out.events, EventKind::kStaleHold, "tactile data stale", stale);
       so.command = Command::hold();
-      speed_.reset();
+      speed_.stop_for_stale();
       sent_velocity_ = {};
     } else {
       stale_held_s_ += dt;

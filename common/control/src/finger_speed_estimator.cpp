@@ -52,10 +52,19 @@ FingerSpeedEstimator::FingerSpeedEstimator(const Config& cfg)
 }
 
 void FingerSpeedEstimator::reset() noexcept {
+  stop();
+  grip_.reset();
+}
+
+void FingerSpeedEstimator::stop_for_stale() noexcept {
+  stop();
+  grip_.pause();
+}
+
+void FingerSpeedEstimator::stop() noexcept {
   velocity_.fill(kZero);
   action_.fill(FingerAction::kIdle);
   recompress_until_.fill(kNever);
-  grip_.reset();
 }
 
 FingerAction FingerSpeedEstimator::margin_move(std::size_t f, const GripOutput& g, double now_s,

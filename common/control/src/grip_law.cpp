@@ -38,6 +38,10 @@ void GripLaw::reset() noexcept {
   carried_s_ = 0;
 }
 
+void GripLaw::pause() noexcept {
+  paused_ = true;
+}
+
 // The latest fresh frame of each fingertip: its tangential load, its total normal force, the
 // load held over the window (the arm's vibration passes through it in a few frames); the
 // weight the fingertips carry in Phase I and the largest load of the current turn in Phase II.
@@ -141,7 +145,7 @@ void GripLaw::follow_slip(const Flags& flags, const GripContext& ctx, double now
 // No slip: the friction is at least the ratios carried; after a safe while it is probed upward
 // (the next slip says how far is too far) and the target relaxes toward the demand.
 void GripLaw::settle(const GripContext& ctx, double now_s, double dt) noexcept {
-  const bool safe = now_s - last_slip_s_ >= cfg_.grip_safe_s;
+  const bool safe = now_s - std::max(last_slip_s_, safe_from_s_) >= cfg_.grip_safe_s;
   // Probing only where the estimate sets the grip, and not in a turn: there a slip counts toward
   // tightness.
   if (safe && !ctx.twist && demand_n_ > cfg_.grip_min_n) {
@@ -167,11 +171,15 @@ GripOutput GripLaw::update(const Flags& flags,
   GripOutput out;
   double dt = 0;
   if (std::isfinite(now_s)) {
-    if (has_now_) dt = std::clamp(finite_or(now_s - last_now_s_, 0.0), 0.0, kMaxStepS);
+    if (has_now_ && !paused_) dt = std::clamp(finite_or(now_s - last_now_s_, 0.0), 0.0, kMaxStepS);
     has_now_ = true;
     last_now_s_ = now_s;
   } else {
     now_s = last_now_s_;
+  }
+  if (paused_) {
+    paused_ = false;
+    safe_from_s_ = now_s;
   }
 
   observe(flags, inputs, ctx, now_s, dt);

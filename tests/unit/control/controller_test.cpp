@@ -225,6 +225,37 @@ TEST(Controller, StaleTooLongAbortsWhenConfigured) {
   EXPECT_NEAR(rig.now(), 0.06 + 0.2, 0.03);
 }
 
+// The margin grip through a stale hold in the carry: the hold stops the fingers but is no new
+// grasp, so the grip's target after RESUMED is the one before the hold (a grip started again from
+// grip_min_n opened on the carried cap: docs/control.md, "A stall it did not survive").
+TEST(Controller, AStaleHoldKeepsTheMarginGripsTarget) {
+  Config cfg = phase_one_config();
+  cfg.grip = GripKind::kMargin;
+  GraspMoveTwistController ctl(cfg);
+  int carry_frames = 0;
+  ScriptedRig rig({}, [&carry_frames](ScriptedRig& r) {
+    if (r.segment() == "MOVE4") ++carry_frames;
+    // A load early in the carry raises the target; gone, the target relaxes toward the least.
+    r.twist_load(carry_frames > 0 && carry_frames < 10 ? 0.02 : 0.0);
+    r.set_stale(1, carry_frames >= 20 && carry_frames < 50);
+    bottle(r);
+  });
+  double before = 0, after = 0;
+  bool was_stale = false;
+  for (int i = 0; i < 20000 && !ctl.done(); ++i) {
+    const ControllerInput in = rig.next_input();
+    const bool stale = in.fingertips[1].stale;
+    if (stale && !was_stale) before = ctl.finger_speeds().grip_law().target_n();
+    const ControllerOutput out = ctl.update(in);
+    if (!stale && was_stale) after = ctl.finger_speeds().grip_law().target_n();
+    was_stale = stale;
+    rig.apply(out);
+  }
+  EXPECT_EQ(ctl.phase(), Phase::kDone);
+  ASSERT_GT(before, 1.2 * cfg.grip_min_n) << "relaxing from the load's target";
+  EXPECT_GE(after, before) << "RESUMED with the target before the hold";
+}
+
 TEST(Controller, StaleHoldsForEverByDefault) {
   GraspMoveTwistController ctl(phase_one_config());
   ScriptedRig rig({}, [](ScriptedRig& r) { r.set_stale(1, r.now() > 0.05); });

@@ -38,7 +38,7 @@ class Hand {
   }
   void set_normal(std::size_t tip, std::size_t e, Vec3 n) { normals_[tip][e] = n; }
   // One update at time t, then the displacements are consumed (next frame is still).
-  FingerSpeedOutput update(FingerMode mode, double t, bool fresh = true) {
+  FingerSpeedOutput update(FingerMode mode, double t, bool fresh = true, GripContext grip = {}) {
     std::array<FingertipInput, kFingertips> in{};
     for (std::size_t f = 0; f < kFingertips; ++f) {
       in[f].elements = elements_[f];
@@ -46,7 +46,7 @@ class Hand {
       in[f].fresh = fresh;
     }
     flags_ = analyzer_.analyze(in, mode, false);
-    const FingerSpeedOutput out = estimator_.update(mode, flags_, in, t);
+    const FingerSpeedOutput out = estimator_.update(mode, flags_, in, t, grip);
     for (auto& tip : elements_) {
       for (auto& r : tip)
         r.dx_mm = r.dy_mm = 0;
@@ -328,6 +328,30 @@ TEST(FingerSpeedEstimator, ResetForgetsTheCurrentVelocity) {
   const FingerSpeedOutput out = hand.update(FingerMode::kMove, 0.01);
   EXPECT_DOUBLE_EQ(out.velocity_mps[0].z, hand.cfg().recompress_gain_mps);  // not 2x
   EXPECT_TRUE(out.recompress_started[0]);
+}
+
+// A stale hold stops the fingers but is not a new grasp: the margin grip keeps its target (a grip
+// that started again from grip_min_n would open on the held cap once data came back); a reset,
+// a new grasp, starts it again.
+TEST(FingerSpeedEstimator, AStaleHoldKeepsTheMarginGripsTargetAResetDoesNot) {
+  Config cfg;
+  cfg.grip = GripKind::kMargin;
+  Hand hand(cfg);
+  for (std::size_t f = 0; f < kFingertips; ++f)
+    hand.press(f, 0, 0.3);
+  double t = 0;
+  GripContext grasp;  // the grasp before the lift: the target is grip_lift_n, above the least
+  grasp.lifting = true;
+  hand.update(FingerMode::kMove, t, true, grasp);
+  const double raised = hand.estimator().grip_law().target_n();
+  ASSERT_EQ(raised, cfg.grip_lift_n);
+  hand.estimator().stop_for_stale();
+  EXPECT_DOUBLE_EQ(norm(hand.estimator().velocity()[0]), 0.0);
+  EXPECT_EQ(hand.estimator().grip_law().target_n(), raised);
+  hand.update(FingerMode::kMove, t += 0.01, true, grasp);
+  EXPECT_EQ(hand.estimator().grip_law().target_n(), raised) << "the first update after it";
+  hand.estimator().reset();
+  EXPECT_EQ(hand.estimator().grip_law().target_n(), cfg.grip_min_n);
 }
 
 TEST(FingerSpeedEstimator, UnusableNormalsFallBackToTheSqueezeDirection) {

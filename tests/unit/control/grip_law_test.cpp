@@ -340,6 +340,23 @@ TEST(GripLaw, ASlipShortOfTheTargetSqueezesAtFullSpeed) {
   EXPECT_LT(out.squeeze_mps, full);
 }
 
+// After a pause (a stale hold), the time without data is no control step and no safe while: the
+// target does not relax in the first update after it, and only grip_safe_s of updates later.
+TEST(GripLaw, APauseIsNeitherAStepNorASafeWhile) {
+  Grip g;
+  g.press(0.3, 0.1);
+  g.step();
+  g.step(true);  // the target raised above the demand
+  const double raised = g.law().target_n();
+  g.hold(0.9 * g.cfg().grip_safe_s);
+  ASSERT_EQ(g.law().target_n(), raised);
+  g.law().pause();
+  g.hold(0.9 * g.cfg().grip_safe_s);
+  EXPECT_EQ(g.law().target_n(), raised) << "the safe while starts again after the pause";
+  g.hold(0.2 * g.cfg().grip_safe_s);
+  EXPECT_LT(g.law().target_n(), raised) << "relaxing a safe while after it";
+}
+
 TEST(GripLaw, DemandIsTheLoadOverTheFrictionEstimateWithTheMargin) {
   struct Case {
     double load;

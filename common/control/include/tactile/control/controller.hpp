@@ -37,6 +37,7 @@ class GraspMoveTwistController {
   // Time the task has run, stale holds excluded (s).
   double task_time() const { return task_s_; }
   const PhaseTwoSequencer& phase_two() const { return two_; }
+  const FingerSpeedEstimator& finger_speeds() const { return speed_; }
 
  private:
   enum class Stage : std::uint8_t { kNotStarted, kPhaseOne, kPhaseTwo, kEnded };

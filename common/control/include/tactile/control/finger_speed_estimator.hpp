@@ -51,6 +51,10 @@ class FingerSpeedEstimator {
   // The arm stopped the fingers (Hold, Open, Stop, or a MoveTo that does not keep them): the
   // current velocity is 0 and any re-compression is over.
   void reset() noexcept;
+  // The arm holds because the tactile data went stale: the velocity is 0 and any re-compression
+  // is over, as for reset(), but the margin grip keeps its grasp (GripLaw::pause): a stall is not
+  // a new grasp, and a grip that started again from grip_min_n would open on the held object.
+  void stop_for_stale() noexcept;
 
   const std::array<Vec3, kFingertips>& velocity() const { return velocity_; }
   const GripLaw& grip_law() const { return grip_; }
@@ -74,6 +78,8 @@ class FingerSpeedEstimator {
   std::array<double, kFingertips> recompress_until_{};
   std::array<bool, kFingertips> over_{};  // OVER in the previous update, for its rising edge
 
+  // Velocity 0, no re-compression (reset and stop_for_stale).
+  void stop() noexcept;
   // The margin grip's MOVE for fingertip f: the servo's squeeze; a raise on slip re-compresses.
   FingerAction margin_move(std::size_t f, const GripOutput& g, double now_s, Vec3& v) noexcept;
 };

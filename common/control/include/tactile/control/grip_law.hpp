@@ -52,6 +52,10 @@ class GripLaw {
   // and the reference from the grip measured next. The friction and weight estimates stay: it
   // is the same object.
   void reset() noexcept;
+  // The tactile data went stale and the arm holds with the fingers stopped: the same grasp, so the
+  // target, the reference and the loads stay; the time without data is neither a control step
+  // (the next update's dt is 0) nor a safe while (it restarts at the next update).
+  void pause() noexcept;
 
   GripOutput update(const Flags& flags, const std::array<FingertipInput, kFingertips>& inputs,
                     const GripContext& ctx, double now_s) noexcept;
@@ -102,6 +106,8 @@ class GripLaw {
   // grip_load_window_s: the lift's floor grip_lift_n is then no longer needed.
   double carried_s_ = 0;
   bool weighed_ = false;
+  bool paused_ = false;     // pause() since the last update
+  double safe_from_s_ = 0;  // no safe while counts before this (the update after a pause)
 };
 
 }  // namespace tactile::control
