@@ -170,8 +170,11 @@ case "$which" in
     # The compose topology's test: killed, its nodes die with it (PR_SET_PDEATHSIG) and its four
     # named namespaces stay until the next run of it removes them.
     before=$(machine)
+    tmp_before=$(find /tmp -maxdepth 1 -name 'tactile-proc-*' | sort)
     test=$build/tests/integration/system/namespaced_system_test
-    "$test" --gtest_filter=NamespacedSystem.RunsTheComposeTopologyWithDockersConfiguration \
+    # Its programs' output folders (tests/support/process.cpp) go under $work: a killed test cannot
+    # remove them, and each CI run left three in /tmp before.
+    TMPDIR=$work "$test" --gtest_filter=NamespacedSystem.RunsTheComposeTopologyWithDockersConfiguration \
       >"$work/first.log" 2>&1 &
     pids+=($!)
     for _ in $(seq 300); do
@@ -191,6 +194,10 @@ case "$which" in
       >"$work/second.log" 2>&1 || fail "the next run failed: $(cat "$work/second.log")"
     [ "$(grep -c "removed namespace tsc-[a-z]*-${pids[0]}-[0-9]* left by an earlier run (pid ${pids[0]}, no longer running)" "$work/second.log")" = 4 ] ||
       fail "the next run did not remove the four namespaces with a line each: $(cat "$work/second.log")"
+    [ "$(find /tmp -maxdepth 1 -name 'tactile-proc-*' | sort)" = "$tmp_before" ] ||
+      fail "the runs left folders in /tmp: $(comm -13 <(echo "$tmp_before") <(find /tmp -maxdepth 1 -name 'tactile-proc-*' | sort))"
+    [ -n "$(find "$work" -maxdepth 1 -name 'tactile-proc-*')" ] ||
+      fail "the killed test's folders are not under $work (TMPDIR not honoured?)"
     check_as_before
     ;;
   compose-test)
