@@ -13,6 +13,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "forest_paths.hpp"
+
 namespace tactile::control {
 namespace {
 
@@ -105,21 +107,10 @@ TEST(ObliviousForest, EveryPathGivesTheRowScoresToTheBitAtEveryDepth) {
     for (int draw = 0; draw < 6; ++draw) {
       const SlipColumns columns = random_columns(rng);
       for (std::size_t n : {0, 1, 9, 31, 32, 41, 64}) {
-        std::array<float, kMaxSlipElements> vector{}, portable{};
-        f.score_columns(columns, n, vector, ModelScoring::kVector);
-        f.score_columns(columns, n, portable, ModelScoring::kPortable);
-        for (std::size_t e = 0; e < n; ++e) {
-          SlipFeatures x{};
-          for (std::size_t k = 0; k < kSlipFeatures; ++k)
-            x[k] = columns[k][e];
-          const float expected = f.score(x);
-          ASSERT_EQ(std::bit_cast<std::uint32_t>(vector[e]), std::bit_cast<std::uint32_t>(expected))
-              << trees << " trees of depth " << depth << ", " << n << " elements, element " << e;
-          ASSERT_EQ(std::bit_cast<std::uint32_t>(portable[e]),
-                    std::bit_cast<std::uint32_t>(expected))
-              << trees << " trees of depth " << depth << ", " << n << " elements, element " << e;
-          ++compared;
-        }
+        testing::expect_every_path_scores_exactly(
+            f, columns, n, std::to_string(trees) + " trees of depth " + std::to_string(depth),
+            compared);
+        if (::testing::Test::HasFatalFailure()) return;
       }
     }
     if (distinct > 255) {

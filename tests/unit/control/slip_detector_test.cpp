@@ -12,6 +12,7 @@
 #include <random>
 #include <vector>
 
+#include "forest_paths.hpp"
 #include "tactile/control/flag_analyzer.hpp"
 
 namespace tactile::control {
@@ -401,21 +402,10 @@ TEST(LearnedDetector, EveryScoringPathGivesTheModelsScoresExactly) {
         for (float& v : column)
           v = value();
       for (std::size_t n : {0, 1, 7, 8, 9, 31, 32, 33, 41, 63, 64}) {
-        std::array<float, kMaxSlipElements> vector{}, portable{};
-        forest.score_columns(columns, n, vector, ModelScoring::kVector);
-        forest.score_columns(columns, n, portable, ModelScoring::kPortable);
-        for (std::size_t e = 0; e < n; ++e) {
-          SlipFeatures x{};
-          for (std::size_t k = 0; k < kSlipFeatures; ++k)
-            x[k] = columns[k][e];
-          const float expected = forest.score(x);
-          ASSERT_EQ(std::bit_cast<std::uint32_t>(vector[e]), std::bit_cast<std::uint32_t>(expected))
-              << to_string(grip) << ", draw " << draw << ", " << n << " elements, element " << e;
-          ASSERT_EQ(std::bit_cast<std::uint32_t>(portable[e]),
-                    std::bit_cast<std::uint32_t>(expected))
-              << to_string(grip) << ", draw " << draw << ", " << n << " elements, element " << e;
-          ++compared;
-        }
+        testing::expect_every_path_scores_exactly(
+            forest, columns, n, std::string(to_string(grip)) + ", draw " + std::to_string(draw),
+            compared);
+        if (::testing::Test::HasFatalFailure()) return;
       }
     }
   }
