@@ -34,7 +34,6 @@ void GripLaw::reset() noexcept {
   ref_n_ = 0;
   peak_n_.fill(0);
   twisting_ = false;
-  weighed_ = false;
   carried_s_ = 0;
 }
 
@@ -73,7 +72,6 @@ void GripLaw::observe(const Flags& flags, const std::array<FingertipInput, kFing
   if (ctx.carrying && !ctx.twist) {
     weight_n_ += std::min(1.0, dt / cfg_.grip_load_window_s) * (load_sum - weight_n_);
     if (!ctx.accelerates_soon) carried_s_ += dt;
-    weighed_ = weighed_ || carried_s_ >= cfg_.grip_load_window_s;
   }
   const bool turning = ctx.twist && !ctx.accelerates_soon;
   if (turning && !twisting_) twist_load_n_ = 0;
@@ -95,7 +93,7 @@ double GripLaw::demand(const GripContext& ctx) const noexcept {
   // through the whole lift reads as an object held from below (docs/slip.md). Weighed: carried
   // grip_load_window_s past the lift's planned acceleration (the load held over that window is
   // then the weight and the vibration's peak).
-  const double least = ctx.lifting && !weighed_ ? cfg_.grip_lift_n : cfg_.grip_min_n;
+  const double least = ctx.lifting && !weighed() ? cfg_.grip_lift_n : cfg_.grip_min_n;
   return std::clamp(finite_or(load / mu_hat_ * (1.0 + margin), kMaxTargetN), least, kMaxTargetN);
 }
 

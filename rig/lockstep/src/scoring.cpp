@@ -114,7 +114,7 @@ void GripScorer::reserve(std::size_t frames) {
 void GripScorer::add(double t, const GripTruth& g) {
   t_.push_back(t);
   need_.push_back(g.needed_n);
-  applied_.push_back(*std::min_element(g.applied_n.begin(), g.applied_n.end()));
+  applied_.push_back(g.scored_n());
   held_.push_back(g.held ? 1 : 0);
   if (g.held) slide_mm_ += g.slide_mm;
 }
@@ -213,7 +213,7 @@ void RunScorer::add_grip(double t, const GripTruth& grip) {
   if (!record_ || run_.series.frames.empty()) return;
   FrameSample& s = run_.series.frames.back();  // add_truth's sample of the same frame
   s.grip_need_n = grip.needed_n;
-  s.grip_applied_n = *std::min_element(grip.applied_n.begin(), grip.applied_n.end());
+  s.grip_applied_n = grip.scored_n();
   s.grip_held = grip.held;
 }
 

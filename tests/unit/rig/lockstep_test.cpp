@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "tactile/rig/control_link.hpp"
 #include "tactile/rig/scenario_run.hpp"
 
 namespace tactile::rig {
@@ -162,6 +163,7 @@ TEST(Lockstep, WholeStoryScenarioHoldsWithLessGripAndIsThePapersRunWithOneKey) {
   const Scenario paper = load_scenario(kDir / "default.yaml");
   Scenario margin = load_scenario(kDir / "whole-story.yaml");
   EXPECT_EQ(margin.grip, "margin");
+  const double lead_s = scenario_controller_config(margin).grip_ff_lead_s;
   const Report p = run_lockstep(paper, o).report;
   LockstepOptions with_series;
   const LockstepResult run = run_lockstep(margin, with_series);
@@ -174,7 +176,7 @@ TEST(Lockstep, WholeStoryScenarioHoldsWithLessGripAndIsThePapersRunWithOneKey) {
       run.series.frames.begin(), run.series.frames.end(),
       [](const auto& f) { return f.phase == static_cast<std::uint8_t>(control::Phase::kLift); });
   ASSERT_NE(lift, run.series.frames.end());
-  const double carried_from_s = lift->t + control::Config{}.grip_ff_lead_s;
+  const double carried_from_s = lift->t + lead_s;
   EXPECT_TRUE(std::any_of(run.series.events.begin(), run.series.events.end(),
                           [&](const auto& e) {
                             return e.kind_name == "RECOMPRESS" &&

@@ -102,10 +102,10 @@ class GripLaw {
   double last_now_s_ = 0;
   double last_slip_s_ = 0;
   bool twisting_ = false;  // the previous update was in a turn
-  // Carried this long past the lift's planned acceleration; weighed once that is
-  // grip_load_window_s: the lift's floor grip_lift_n is then no longer needed.
+  // Carried this long past the lift's planned acceleration; the object is weighed once that is
+  // grip_load_window_s (weighed()): the lift's floor grip_lift_n is then no longer needed.
   double carried_s_ = 0;
-  bool weighed_ = false;
+  bool weighed() const noexcept { return carried_s_ >= cfg_.grip_load_window_s; }
   bool paused_ = false;     // pause() since the last update
   double safe_from_s_ = 0;  // no safe while counts before this (the update after a pause)
 };

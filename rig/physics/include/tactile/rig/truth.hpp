@@ -3,6 +3,7 @@
 // Ground truth for every camera frame (docs/rig.md, "Ground truth"): the true per-element
 // forces, shear displacements and stick/slide state, the cap's pose and angle. Mirrors the
 // wire's GroundTruth message without depending on Protobuf.
+#include <algorithm>
 #include <array>
 #include <cstdint>
 
@@ -64,6 +65,9 @@ struct GripTruth {
   // in-contact elements' tips slid over the cap, averaged with their normal forces as weights;
   // the larger of the two. The feelers' elastic deflection is not sliding and does not count.
   double slide_mm = 0;
+  // The grip the report scores (its `grip` ratios, the series' grip_applied_N): the smaller
+  // fingertip's, the one that lets go first.
+  double scored_n() const noexcept { return std::min(applied_n[0], applied_n[1]); }
 };
 // From the world now and the frame's truth just taken from it (TruthRecorder::take).
 GripTruth grip_truth(const World& world, const GroundTruth& truth);
