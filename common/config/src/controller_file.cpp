@@ -44,6 +44,8 @@ const DoubleField kDoubles[] = {
     {"grip_touch_n", &Config::grip_touch_n},
     {"grip_min_n", &Config::grip_min_n},
     {"grip_lift_n", &Config::grip_lift_n},
+    {"grip_loading_speed_mps", &Config::grip_loading_speed_mps},
+    {"grip_loading_distance_m", &Config::grip_loading_distance_m},
     {"grip_margin", &Config::grip_margin},
     {"grip_twist_margin", &Config::grip_twist_margin},
     {"grip_mu_initial", &Config::grip_mu_initial},

@@ -96,6 +96,10 @@ void validate_margin_grip(const Config& c) {
   positive("grip_lift_n", c.grip_lift_n);
   if (c.grip_lift_n < c.grip_min_n) fail("grip_lift_n", c.grip_lift_n, "must be >= grip_min_n");
   if (!(c.grip_min_n > c.grip_touch_n)) fail("grip_min_n", c.grip_min_n, "must be > grip_touch_n");
+  non_negative("grip_loading_speed_mps", c.grip_loading_speed_mps);
+  at_most("grip_loading_speed_mps", c.grip_loading_speed_mps, "lift_speed_mps", c.lift_speed_mps);
+  non_negative("grip_loading_distance_m", c.grip_loading_distance_m);
+  at_most("grip_loading_distance_m", c.grip_loading_distance_m, "0.01", 0.01);
   non_negative("grip_margin", c.grip_margin);
   at_most("grip_margin", c.grip_margin, "2", 2.0);
   non_negative("grip_twist_margin", c.grip_twist_margin);

@@ -85,6 +85,7 @@ GripContext GraspMoveTwistController::grip_context(const ArmFeedback& arm) const
   if (stage_ == Stage::kPhaseOne) {
     c.carrying = phase_ == Phase::kLift || phase_ == Phase::kTransport;
     c.lifting = phase_ == Phase::kGrasp || phase_ == Phase::kLift;
+    c.loading = phase_ == Phase::kLift && one_.loading();
     c.accelerates_soon = one_.accelerates_within(arm, task_s_, lead_s);
   } else if (stage_ == Stage::kPhaseTwo) {
     c.twist = true;

@@ -35,6 +35,7 @@ void GripLaw::reset() noexcept {
   peak_n_.fill(0);
   twisting_ = false;
   carried_s_ = 0;
+  slip_run_ = 0;
 }
 
 void GripLaw::pause() noexcept {
@@ -54,6 +55,10 @@ void GripLaw::observe(const Flags& flags, const std::array<FingertipInput, kFing
     if (!std::isfinite(load) || !std::isfinite(total)) continue;
     load_n_[f] = load;
     total_n_[f] = total;
+    std::uint32_t touching = 0;
+    for (const ElementReading& r : inputs[f].elements)
+      touching += r.contact && std::isfinite(r.fz) ? 1U : 0U;
+    contacts_[f] = touching;
     if (load >= peak_n_[f] || now_s - peak_s_[f] > cfg_.grip_load_window_s) {
       peak_n_[f] = load;
       peak_s_[f] = now_s;
@@ -93,8 +98,12 @@ double GripLaw::demand(const GripContext& ctx) const noexcept {
   // through the whole lift reads as an object held from below (docs/slip.md). Weighed: carried
   // grip_load_window_s past the lift's planned acceleration (the load held over that window is
   // then the weight and the vibration's peak).
-  const double least = ctx.lifting && !weighed() ? cfg_.grip_lift_n : cfg_.grip_min_n;
-  return std::clamp(finite_or(load / mu_hat_ * (1.0 + margin), kMaxTargetN), least, kMaxTargetN);
+  // With the loading phase the grip follows the weight as it arrives instead (lift_loads_first).
+  const bool floor = ctx.lifting && !weighed() && !lift_loads_first(cfg_);
+  const double least = floor ? cfg_.grip_lift_n : cfg_.grip_min_n;
+  // The loading phase asks at most grip_lift_n: more would follow an anchored object's pull.
+  const double most = ctx.loading ? std::max(least, cfg_.grip_lift_n) : kMaxTargetN;
+  return std::clamp(finite_or(load / mu_hat_ * (1.0 + margin), kMaxTargetN), least, most);
 }
 
 // A slip frame. The grip goes up at once, from what it is now, unless the last raise has not
@@ -133,10 +142,16 @@ void GripLaw::follow_slip(const Flags& flags, const GripContext& ctx, double now
     // or stop shakes a firm grip too): it stops relaxing, its target held (at least the demand).
     // Not raised to the grip measured: that swings with the arm's vibration, and false slips at
     // its peaks would ratchet the target up by the swing each time.
+    // A slide (slip frames in a row) is no vibration's peak: the object is going, and the grip
+    // goes up from what it is, however firm.
     const double step = 1.0 + cfg_.grip_slip_step;
-    const double raised = grip_n_ <= demand_n_ * step ? std::max(demand_n_, grip_n_) * step
-                                                      : std::max(demand_n_, target_n_);
+    const bool slide = slip_run_ >= 3 && !ctx.loading;
+    const bool firm = grip_n_ > demand_n_ * step && !slide;
+    const double raised =
+        firm ? std::max(demand_n_, target_n_) : std::max(demand_n_, grip_n_) * step;
     target_n_ = std::min(std::max(target_n_, raised), kMaxTargetN);
+    // At once: the force rate is for the relaxing and the demand's steps, not for a slip.
+    ref_n_ = std::max(ref_n_, target_n_);
   }
 }
 
@@ -185,6 +200,7 @@ GripOutput GripLaw::update(const Flags& flags,
   for (const FingertipInput& in : inputs)
     fresh = fresh || in.fresh;
   demand_n_ = demand(ctx);
+  if (fresh) slip_run_ = flags.slip ? slip_run_ + 1 : 0;
   if (fresh && flags.slip) {
     follow_slip(flags, ctx, now_s, out);
   } else {
@@ -200,16 +216,22 @@ GripOutput GripLaw::update(const Flags& flags,
 
   // The speed holds until the next update: over a longer period it must be slower for the same
   // squeeze per period (a loop gain that does not grow with the camera's period).
+  // The grip's stiffness is its elements' in contact, each feeler a spring (docs/rig.md): the
+  // gain is per element, so each period closes the same part of the error however many touch
+  // (with all of a firm grip's elements on the full gain the loop rang, 0.3 N peak to peak).
   const double period_s = dt > 0 ? dt : cfg_.grip_servo_gain_period_s;
-  const double gain =
-      cfg_.grip_servo_gain_mps_per_n * std::min(1.0, cfg_.grip_servo_gain_period_s / period_s);
+  const double elements = std::max(1.0, 0.5 * static_cast<double>(contacts_[0] + contacts_[1]));
+  const double gain = cfg_.grip_servo_gain_mps_per_n *
+                      std::min(1.0, cfg_.grip_servo_gain_period_s / period_s) / elements;
   double v = std::clamp(gain * (ref_n_ - grip_n_), -cfg_.grip_servo_max_speed_mps,
                         cfg_.grip_servo_max_speed_mps);
   // A re-compression: short of the target within recompress_duration_s of a slip, the servo
   // squeezes at its full speed (a slipping object leaves in a few tens of milliseconds; the
   // servo's own time constant is about as long).
-  if (slipped_ && now_s - last_slip_s_ <= cfg_.recompress_duration_s && grip_n_ < ref_n_) {
-    v = cfg_.grip_servo_max_speed_mps;
+  // And a slip never opens the fingers: the grip over its reference then is the squeeze of the
+  // re-compression arriving, and the object may still be sliding.
+  if (slipped_ && now_s - last_slip_s_ <= cfg_.recompress_duration_s) {
+    v = grip_n_ < ref_n_ ? cfg_.grip_servo_max_speed_mps : std::max(v, 0.0);
   }
   // F2 bounds the squeeze: no element past recompress_max_f2_fraction of it.
   const double limit_n = cfg_.recompress_max_f2_fraction * cfg_.f2_n;

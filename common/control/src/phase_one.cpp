@@ -62,10 +62,15 @@ void PhaseOneSequencer::enter(Phase p, const StepInput& in, SegmentIds& ids,
       break;
     case Phase::kLift:
       lift_base_n_ = load();
-      lift_start_s_ = t;
-      lift_frames_ = lift_slip_frames_ = 0;
-      lift_gain_sum_n_ = 0;
-      seq_.move(carry("MOVE3", above_cap(cfg_.carry_height_m), cfg_.lift_speed_mps), t, ids, out);
+      loading_ = lift_loads_first(cfg_);
+      if (loading_) {
+        // The loading phase: the grip follows the weight arriving before the cap leaves.
+        seq_.move(carry("MOVE3", above_cap(cfg_.grasp_height_m + cfg_.grip_loading_distance_m),
+                        cfg_.grip_loading_speed_mps),
+                  t, ids, out);
+      } else {
+        begin_lift(t, ids, out);
+      }
       break;
     case Phase::kTransport:
       seq_.move(carry("MOVE4", above_bottle(cfg_.carry_height_m), cfg_.carry_speed_mps), t, ids,
@@ -94,9 +99,17 @@ void PhaseOneSequencer::enter(Phase p, const StepInput& in, SegmentIds& ids,
   }
 }
 
+void PhaseOneSequencer::begin_lift(double t, SegmentIds& ids, StepOutput& out) noexcept {
+  lift_start_s_ = t;
+  lift_frames_ = lift_slip_frames_ = 0;
+  lift_gain_sum_n_ = 0;
+  seq_.move(carry("MOVE3", above_cap(cfg_.carry_height_m), cfg_.lift_speed_mps), t, ids, out);
+}
+
 void PhaseOneSequencer::start(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept {
   grasp_classified_ = false;
   released_on_lift_ = false;
+  loading_ = false;
   settled_after_s_ = 0;
   seq_.restart();
   enter(Phase::kApproach, in, ids, out);
@@ -203,9 +216,12 @@ void PhaseOneSequencer::lower_by_load(const StepInput& in, SegmentIds& ids,
 
 void PhaseOneSequencer::lift(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept {
   if (!grasp_classified_ && beyond_paper(cfg_.slip_detector)) {
-    lift_by_load(in, ids, out);
+    // The load transfer is judged over the lift proper: while the weight arrives in the loading
+    // phase the light grip slips as it catches up, which is no support holding the cap.
+    if (!loading_) lift_by_load(in, ids, out);
     if (released_on_lift_) return;
   } else if (!grasp_classified_) {
+    // The paper's rule, in the loading phase too: the weight's slip as it arrives is its grasp.
     const SlipDirection d = slip_direction(in);
     if (d.classification == SlipClass::kGrasp) {
       // The weight pulls the cap along gravity: it is held; keep lifting.
@@ -219,7 +235,13 @@ void PhaseOneSequencer::lift(const StepInput& in, SegmentIds& ids, StepOutput& o
       return;
     }
   }
-  if (seq_.segment_done(in, out)) enter(Phase::kTransport, in, ids, out);
+  if (!seq_.segment_done(in, out)) return;
+  if (loading_) {
+    loading_ = false;
+    begin_lift(in.t, ids, out);
+  } else {
+    enter(Phase::kTransport, in, ids, out);
+  }
 }
 
 // Positive slips here (deceleration, vibration) are the estimator's: re-compression. The first

@@ -336,6 +336,7 @@ TEST(FingerSpeedEstimator, ResetForgetsTheCurrentVelocity) {
 TEST(FingerSpeedEstimator, AStaleHoldKeepsTheMarginGripsTargetAResetDoesNot) {
   Config cfg;
   cfg.grip = GripKind::kMargin;
+  cfg.grip_loading_speed_mps = 0;  // a lift without its loading phase has the floor grip_lift_n
   Hand hand(cfg);
   for (std::size_t f = 0; f < kFingertips; ++f)
     hand.press(f, 0, 0.3);

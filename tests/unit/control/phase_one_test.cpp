@@ -2,6 +2,7 @@
 // sequences: the whole event sequence and the arm commands, in order.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -257,6 +258,76 @@ TEST(PhaseOne, NegativeFirstSlipOnLiftPutsTheCapBackAndAborts) {
   EXPECT_EQ(describe(t.events), expected);
   EXPECT_EQ(testing::segment_names(t),
             (std::vector<std::string>{"MOVE1", "MOVE2", "MOVE3", "MOVE6"}));
+}
+
+// The margin grip's lift loads first (docs/control.md, "The lift's loading phase"): MOVE3 rises
+// grip_loading_distance_m at grip_loading_speed_mps with the fingers' velocities kept, then on to
+// the carry height at the lift's speed. The paper's rule classifies the weight's slip as it
+// arrives in the loading phase, as in the lift.
+TEST(PhaseOne, TheMarginGripsLiftLoadsFirst) {
+  Config cfg = phase_one_config();
+  cfg.grip = GripKind::kMargin;
+  GraspMoveTwistController ctl(cfg);
+  ScriptedRig rig({}, [](ScriptedRig& r) {
+    if (r.segments_named("MOVE3") == 1) weight_on_lift(r);
+    bottle_on_lowering(r);
+  });
+  const testing::Trace t = testing::run(ctl, rig);
+  EXPECT_EQ(ctl.phase(), Phase::kDone);
+  std::vector<MoveTo> lifts;
+  for (const Command& c : t.commands) {
+    if (c.kind == CommandKind::kMoveTo && std::string(c.move_to.name) == "MOVE3") {
+      lifts.push_back(c.move_to);
+    }
+  }
+  ASSERT_EQ(lifts.size(), 2U);
+  EXPECT_DOUBLE_EQ(lifts[0].target.position_m.z, cfg.grasp_height_m + cfg.grip_loading_distance_m);
+  EXPECT_DOUBLE_EQ(lifts[0].max_speed_mps, cfg.grip_loading_speed_mps);
+  EXPECT_TRUE(lifts[0].keep_finger_velocities);
+  EXPECT_DOUBLE_EQ(lifts[1].target.position_m.z, cfg.carry_height_m);
+  EXPECT_DOUBLE_EQ(lifts[1].max_speed_mps, cfg.lift_speed_mps);
+  EXPECT_TRUE(lifts[1].keep_finger_velocities);
+  const std::vector<std::string> names = describe(t.events);
+  EXPECT_EQ(std::count(names.begin(), names.end(), "GRASP_CLASSIFIED tip0"), 1);
+
+  cfg.grip_loading_speed_mps = 0;  // no loading phase: one MOVE3, as the paper's grip has
+  GraspMoveTwistController without(cfg);
+  ScriptedRig plain({}, paper_phase_one);
+  const testing::Trace u = testing::run(without, plain);
+  const std::vector<std::string> segments = testing::segment_names(u);
+  EXPECT_EQ(std::count(segments.begin(), segments.end(), "MOVE3"), 1);
+}
+
+// The load transfer's lift (field and learned detectors) is judged over the lift proper: a light
+// grip slipping in every frame of the loading phase, as it catches the weight, is not read as a
+// cap held from below (before the loading phase, slipping through most of the lift's first 0.2 s
+// put the cap back).
+TEST(PhaseOne, SlipsWhileTheWeightArrivesAreNoSupportFromBelow) {
+  Config cfg = phase_one_config();
+  cfg.grip = GripKind::kMargin;
+  cfg.slip_detector = SlipDetectorKind::kField;
+  GraspMoveTwistController ctl(cfg);
+  ScriptedRig rig({}, [](ScriptedRig& r) {
+    if (r.segment() == "MOVE3" && r.segments_named("MOVE3") == 1) {
+      r.slip(0, 0, 0.0, 0.02 * (r.segment_frames() + 1));
+      r.slip(1, 0, 0.0, 0.02 * (r.segment_frames() + 1));
+    }
+  });
+  int loading_slips = 0;
+  bool transported = false;
+  for (int i = 0; i < 20000 && !ctl.done() && !transported; ++i) {
+    const ControllerInput in = rig.next_input();
+    const ControllerOutput out = ctl.update(in);
+    if (rig.segment() == "MOVE3" && rig.segments_named("MOVE3") == 1 && out.flags.slip) {
+      ++loading_slips;
+    }
+    transported = out.phase == Phase::kTransport;
+    EXPECT_NE(out.phase, Phase::kRelease) << "put back on the loading phase's slips";
+    rig.apply(out);
+  }
+  const double loading_s = cfg.grip_loading_distance_m / cfg.grip_loading_speed_mps;
+  ASSERT_GT(loading_slips, 0.5 * loading_s / 0.01) << "the loading phase slipped in most frames";
+  EXPECT_TRUE(transported);
 }
 
 TEST(PhaseOne, OnlyTheFirstClassifiedSlipOnLiftCounts) {

@@ -153,17 +153,19 @@ TEST(Lockstep, NoDisturbanceNoKey) {
 }
 
 // The margin grip (docs/control.md, "The margin grip") on the default scenario, as
-// whole-story.yaml holds it: the paper's whole story in one run (grasp classified on the lift, a
-// re-compression while the arm carries the cap, past the lift's own acceleration, release at the
-// bottle, tight in the true cycle), with no drop and no OVER, and the cap held closer to the least
-// grip that holds than by the paper's. One key (grip: paper) gives default.yaml's run exactly.
+// whole-story.yaml holds it: grasp classified on the lift, a re-compression as the weight arrives
+// in the lift's loading phase, release at the bottle, tight in the true cycle, with no drop and no
+// OVER, and the cap held closer to the least grip that holds than by the paper's. One key (grip:
+// paper) gives default.yaml's run exactly. Not shown since the loading phase (2026-11-28): a
+// re-compression from the arm's vibration during the carry (the grip, about 2.4 times the least,
+// holds through it; docs/control.md, "The whole story in one run").
 TEST(Lockstep, WholeStoryScenarioHoldsWithLessGripAndIsThePapersRunWithOneKey) {
   LockstepOptions o;
   o.record_series = false;
   const Scenario paper = load_scenario(kDir / "default.yaml");
   Scenario margin = load_scenario(kDir / "whole-story.yaml");
   EXPECT_EQ(margin.grip, "margin");
-  const double lead_s = scenario_controller_config(margin).grip_ff_lead_s;
+  const control::Config cfg = scenario_controller_config(margin);
   const Report p = run_lockstep(paper, o).report;
   LockstepOptions with_series;
   const LockstepResult run = run_lockstep(margin, with_series);
@@ -171,19 +173,17 @@ TEST(Lockstep, WholeStoryScenarioHoldsWithLessGripAndIsThePapersRunWithOneKey) {
   margin.grip = "paper";
   EXPECT_EQ(report_json(run_lockstep(margin, o).report), report_json(p));
   const nlohmann::json stages = nlohmann::json::parse(report_json(m)).at("recompressions_by_stage");
-  EXPECT_GE(stages.value("LIFT", 0) + stages.value("TRANSPORT", 0), 1) << stages.dump();
   const auto lift = std::find_if(
       run.series.frames.begin(), run.series.frames.end(),
       [](const auto& f) { return f.phase == static_cast<std::uint8_t>(control::Phase::kLift); });
   ASSERT_NE(lift, run.series.frames.end());
-  const double carried_from_s = lift->t + lead_s;
+  const double loaded_s = lift->t + cfg.grip_loading_distance_m / cfg.grip_loading_speed_mps;
   EXPECT_TRUE(std::any_of(run.series.events.begin(), run.series.events.end(),
                           [&](const auto& e) {
-                            return e.kind_name == "RECOMPRESS" &&
-                                   (e.phase == "LIFT" || e.phase == "TRANSPORT") &&
-                                   e.t > carried_from_s;
+                            return e.kind_name == "RECOMPRESS" && e.phase == "LIFT" &&
+                                   e.t <= loaded_s + cfg.grip_ff_lead_s;
                           }))
-      << "no re-compression while carrying, past the lift's acceleration (from " << carried_from_s
+      << "no re-compression as the weight arrived (the lift from " << lift->t
       << " s): " << stages.dump();
   EXPECT_EQ(m.controller.grip, "margin");
   EXPECT_EQ(p.controller.grip, "paper");

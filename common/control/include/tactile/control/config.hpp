@@ -115,10 +115,18 @@ struct Config {
   double grip_touch_n = 0.05;
   // The least target (N per fingertip): the fingertips stay on the object, above the touch.
   double grip_min_n = 0.1;
-  // The least target from the grasp to the lift's end (N per fingertip), before the lift has
-  // weighed the object: with grip_min_n alone the learned detector saw the cap slip through most
-  // of the lift and put it back in 20 of the seed-20 sweep's 32 normal scenarios.
+  // Without the loading phase (below): the least target from the grasp to the lift's end (N per
+  // fingertip), before the lift has weighed the object (with grip_min_n alone the learned
+  // detector saw the cap slip through most of the lift and put it back in 20 of the seed-20
+  // sweep's 32 normal scenarios). With it: the most the loading phase's demand asks (an object
+  // anchored to the table pulls back as hard as the fingertips hold it).
   double grip_lift_n = 0.8;
+  // The lift's loading phase (a person's: the grip rises with the load before the object leaves
+  // the table): the arm first rises grip_loading_distance_m at grip_loading_speed_mps, slowly
+  // enough for the grip to follow the load as the fingertips' rubber takes the weight; then the
+  // lift. With it the grasp needs no floor: grip_lift_n is for a lift without one (speed 0).
+  double grip_loading_speed_mps = 0.001;
+  double grip_loading_distance_m = 0.0003;
   // Grip over the least grip the load and the friction estimate ask for, minus 1, in the carry
   // (Johansson and Westling: 0.1-0.4) and in the twist (the thread's torque rises in a turn; 0.5
   // let the default scenario's turns slip two cycles in a row: tight declared a cycle early).
@@ -235,6 +243,12 @@ struct Config {
   // Throws std::invalid_argument naming the first bad field and its value.
   void validate() const;
 };
+
+// The margin grip's lift begins with its loading phase (Config::grip_loading_speed_mps).
+inline bool lift_loads_first(const Config& c) {
+  return c.grip == GripKind::kMargin && c.grip_loading_speed_mps > 0 &&
+         c.grip_loading_distance_m > 0;
+}
 
 // "slip detector: learned, grip: paper": which slip detector and which grip a controller of this
 // configuration runs, as hand_node and the rig say it in their first lines.

@@ -8,13 +8,15 @@
 //   demand = (L + L_ff) / mu_hat * (1 + margin)   L: the larger fingertip's tangential load |sum
 //                                                 F_t|, held over load_window; L_ff: the
 //                                                 feed-forward of a planned acceleration
-//   target: raised to the demand at once, by slip_step on every slip frame; relaxed toward the
-//           demand with relax_s once no slip for safe_s
+//   target: raised to the demand at once, by slip_step on a slip frame (a firm grip only on a
+//           slide: three slip frames in a row, not in the lift's loading phase); relaxed toward
+//           the demand with relax_s once no slip for safe_s
 //   mu_hat: lowered to the load ratio L / F_n of a slip of the grip it set, by at most mu_drop
 //           in one burst, and bounded above by the middle of that drop from then on; raised
 //           slowly after safe_s (not in a turn); never under the largest ratio carried without
 //           slip within load_window (Coulomb)
-//   v_z = gain (F_ref - F)                        F_ref follows the target at most force_rate
+//   v_z = gain / n (F_ref - F)                    F_ref follows the target at most force_rate; n
+//                                                 the elements in contact (the grip's stiffness)
 //
 // Pure: time is an argument; no allocation; every output finite.
 #include <array>
@@ -31,8 +33,11 @@ struct GripContext {
   bool twist = false;
   // Phase I's lift and carry: the fingertips' load is the cap's weight (m_hat).
   bool carrying = false;
-  // Phase I's grasp and lift: the weight is not known yet (at least grip_lift_n).
+  // Phase I's grasp and lift: the weight is not known yet (at least grip_lift_n without the
+  // loading phase).
   bool lifting = false;
+  // The lift's loading phase: the weight arrives while the cap still rests on the table.
+  bool loading = false;
   // The arm's own planned acceleration (a carrying segment's start or stop, the lift after the
   // grasp, a turn after the twist grasp) is at most grip_ff_lead_s away.
   bool accelerates_soon = false;
@@ -83,11 +88,13 @@ class GripLaw {
   double weight_n_ = 0;      // the cap's weight as the fingertips carried it (m_hat g)
   double twist_load_n_ = 0;  // the largest tangential load of the last turn, per fingertip
   bool slipped_ = false;
+  std::uint32_t slip_run_ = 0;                // fresh slip frames in a row, this one included
   double mu_before_slip_ = 0;                 // mu_hat when the current burst of slips began
   double mu_ceiling_ = 0;                     // mu_hat rises no further (0: no slip has bounded it)
   std::array<double, kFingertips> load_n_{};  // |sum F_t| on the latest fresh frame
   std::array<double, kFingertips> total_n_{};
-  std::array<double, kFingertips> peak_n_{};  // load held over grip_load_window_s
+  std::array<std::uint32_t, kFingertips> contacts_{};  // elements in contact, latest fresh frame
+  std::array<double, kFingertips> peak_n_{};           // load held over grip_load_window_s
   std::array<double, kFingertips> peak_s_{};
   // The largest load ratio L_f / F_f of the window (fingertips pressed at least grip_min_n): a
   // lower bound on the friction.

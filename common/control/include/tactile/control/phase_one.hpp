@@ -30,6 +30,8 @@ class PhaseOneSequencer {
   Command resume(SegmentIds& ids, double t) noexcept;
 
   Phase phase() const { return seq_.phase(); }
+  // The lift's loading phase runs (lift_loads_first): the weight arrives.
+  bool loading() const { return loading_; }
   // The margin grip's feed-forward: Sequencer::accelerates_within.
   bool accelerates_within(const ArmFeedback& arm, double t, double lead_s) const noexcept {
     return seq_.accelerates_within(arm, t, lead_s);
@@ -43,6 +45,8 @@ class PhaseOneSequencer {
  private:
   void enter(Phase p, const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
   void lift(const StepInput& in, SegmentIds& ids, StepOutput& out) noexcept;
+  // MOVE3 to the carry height at the lift's speed; the lift's classification counts from here.
+  void begin_lift(double t, SegmentIds& ids, StepOutput& out) noexcept;
   // The field detector's lift and lowering: classified from the load transfer.
   void track_load(const StepInput& in) noexcept;
   double load() const;
@@ -63,6 +67,7 @@ class PhaseOneSequencer {
   double settled_after_s_ = 0;  // no slip direction is classified before this (resume_settle_s)
   bool grasp_classified_ = false;
   bool released_on_lift_ = false;
+  bool loading_ = false;  // the lift's loading phase (MOVE3's first, slow part) runs
   WristPose release_pose_;
   // The load transfer (field detector): each fingertip's load along gravity on its latest fresh
   // frame; the load when the lift began; over the lift so far, the fresh frames, those with
