@@ -28,6 +28,7 @@ FingertipFlags analyze_with(const FingertipInput& in, double f1_n, double f2_n,
     if (r.fz > f1_n) f.touch = true;
     if (r.fz > f2_n) f.over = true;
     f.total_fz_n += r.fz;
+    ++f.contact_elements;
     if (r.fz > best_fz) {
       best_fz = r.fz;
       f.max_fz_index = index;

@@ -55,10 +55,7 @@ void GripLaw::observe(const Flags& flags, const std::array<FingertipInput, kFing
     if (!std::isfinite(load) || !std::isfinite(total)) continue;
     load_n_[f] = load;
     total_n_[f] = total;
-    std::uint32_t touching = 0;
-    for (const ElementReading& r : inputs[f].elements)
-      touching += r.contact && std::isfinite(r.fz) ? 1U : 0U;
-    contacts_[f] = touching;
+    contacts_[f] = flags.fingertip[f].contact_elements;
     if (load >= peak_n_[f] || now_s - peak_s_[f] > cfg_.grip_load_window_s) {
       peak_n_[f] = load;
       peak_s_[f] = now_s;
@@ -102,7 +99,7 @@ double GripLaw::demand(const GripContext& ctx) const noexcept {
   const bool floor = ctx.lifting && !weighed() && !lift_loads_first(cfg_);
   const double least = floor ? cfg_.grip_lift_n : cfg_.grip_min_n;
   // The loading phase asks at most grip_lift_n: more would follow an anchored object's pull.
-  const double most = ctx.loading ? std::max(least, cfg_.grip_lift_n) : kMaxTargetN;
+  const double most = ctx.loading ? cfg_.grip_lift_n : kMaxTargetN;  // >= least: validated
   return std::clamp(finite_or(load / mu_hat_ * (1.0 + margin), kMaxTargetN), least, most);
 }
 

@@ -167,6 +167,8 @@ TEST(FlagAnalyzer, NamesTheLargestForceOverallAndAmongSlipping) {
   const FingertipFlags f = a.analyze(in, false);
   EXPECT_EQ(f.max_fz_index, 1);  // in contact; element 4's force is ignored
   EXPECT_DOUBLE_EQ(f.max_fz_n, 1.2);
+  EXPECT_DOUBLE_EQ(f.total_fz_n, 0.4 + 1.2 + 0.9 + 0.2);
+  EXPECT_EQ(f.contact_elements, 4U);  // the elements the grip sums
   EXPECT_EQ(f.slip_max_fz_index, 2);
   EXPECT_EQ(f.slipping_elements, 3U);
   EXPECT_DOUBLE_EQ(f.max_slip_mm, 0.03);

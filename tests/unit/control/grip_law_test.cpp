@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -56,6 +57,7 @@ class Grip {
       in[f].fresh = true;
       FingertipFlags& ff = flags.fingertip[f];
       ff.total_fz_n = elements_[f][0].contact ? elements_[f][0].fz : 0.0;
+      ff.contact_elements = elements_[f][0].contact ? 1U : 0U;
       ff.max_fz_n = ff.total_fz_n;
       ff.max_fz_index = 0;
       ff.slip = slip;
@@ -434,17 +436,20 @@ TEST(GripLaw, TheServoSettlesOnAFirmGripAsOnALightOne) {
       double grip = 0;
       for (std::size_t f = 0; f < kFingertips; ++f) {
         double total = 0;
+        std::uint32_t touching = 0;
         for (int e = 0; e < kElements; ++e) {
           ElementReading& r = elements[f][static_cast<std::size_t>(e)];
           r.fz = kStiffnessNPerM * std::max(0.0, depth_m - e * kOnsetM);
           r.contact = r.fz > 0;
           r.fy = 0;
           total += r.fz;
+          touching += r.contact ? 1U : 0U;
         }
         elements[f][0].fy = load;  // the load, carried (its place does not matter to the law)
         in[f].elements = elements[f];
         in[f].fresh = true;
         flags.fingertip[f].total_fz_n = total;
+        flags.fingertip[f].contact_elements = touching;
         flags.fingertip[f].max_fz_n = elements[f][0].fz;
         flags.fingertip[f].max_fz_index = 0;
         grip = total;

@@ -224,6 +224,8 @@ struct FingertipFlags {
   std::array<std::uint32_t, kMaxSlipElements> slipping_ids{};
   double max_slip_mm = 0;  // largest per-frame displacement magnitude among in-contact elements
   double total_fz_n = 0;   // the sum of the in-contact elements' F_z: the fingertip's grip
+  // The elements total_fz_n sums: the grip's stiffness is theirs (the margin grip's servo gain).
+  std::uint32_t contact_elements = 0;
 };
 
 struct Flags {
