@@ -4,6 +4,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "tactile/detail/multiversion.hpp"
 #include "tactile/rig/optics.hpp"
 
 namespace tactile::rig {
@@ -20,6 +21,77 @@ double partial_expectation(double mu, double f, double sigma) {
   const double cdf = 0.5 * std::erfc(-z / std::numbers::sqrt2);
   const double pdf = std::exp(-0.5 * z * z) / std::sqrt(2.0 * std::numbers::pi);
   return d * cdf + sigma * pdf;
+}
+
+// One disk's pixels with their noise: value + sigma z, clamped to the sensor's range [0, top] and
+// rounded half up (values are never negative here). Rows y0..y1 of a box w wide, each written
+// over its span's columns only; the noise samples z keep the whole box's offsets, so a disk
+// pixel's noise does not depend on which pixels around it are drawn. Without shot noise every
+// pixel's sigma is the read noise's: `sigma` is then that one value (one load less per pixel, the
+// same numbers).
+template <bool kOneSigma, typename Pixel>
+[[gnu::always_inline]] inline void noisy_rows(const float* value, const float* sigma,
+                                              const float* z, const Renderer::Span* spans, int rows,
+                                              std::size_t w, Pixel* row, std::size_t stride,
+                                              float top) noexcept {
+  const float one_sigma = *sigma;
+  for (int r = 0; r < rows; ++r, ++spans) {
+    // Bounds in locals: the pixel stores may alias anything (8-bit pixels), so a bound read
+    // through `spans` would be reloaded every pixel and the loop left unvectorised.
+    const auto x_end = static_cast<std::size_t>(spans->x1);
+    for (auto x = static_cast<std::size_t>(spans->x0); x < x_end; ++x) {
+      const float s = kOneSigma ? one_sigma : sigma[x];
+      const float v = std::clamp(value[x] + s * z[x], 0.0F, top);
+      row[x] = static_cast<Pixel>(v + 0.5F);
+    }
+    value += w;
+    if constexpr (!kOneSigma) sigma += w;
+    z += w;
+    row += stride;
+  }
+}
+
+TACTILE_CLONES_SAME_BITS
+void noisy_rows_u8(const float* value, const float* sigma, bool one_sigma, const float* z,
+                   const Renderer::Span* spans, int rows, std::size_t w, std::uint8_t* row,
+                   std::size_t stride, float top) noexcept {
+  if (one_sigma) {
+    noisy_rows<true>(value, sigma, z, spans, rows, w, row, stride, top);
+  } else {
+    noisy_rows<false>(value, sigma, z, spans, rows, w, row, stride, top);
+  }
+}
+
+TACTILE_CLONES_SAME_BITS
+void noisy_rows_u16(const float* value, const float* sigma, bool one_sigma, const float* z,
+                    const Renderer::Span* spans, int rows, std::size_t w, std::uint16_t* row,
+                    std::size_t stride, float top) noexcept {
+  if (one_sigma) {
+    noisy_rows<true>(value, sigma, z, spans, rows, w, row, stride, top);
+  } else {
+    noisy_rows<false>(value, sigma, z, spans, rows, w, row, stride, top);
+  }
+}
+
+// A Gaussian spot's row over its span [j0, j1): value = background + ey column_exp, and its noise
+// sigma, the read noise with the shot noise of the value (Renderer::pixel_sigma, the same
+// operations in the same order: shot_scale = scale, gain 0 for none).
+TACTILE_CLONES_SAME_BITS
+void spot_row(const float* bg, const double* column_exp, double ey, double read, double shot_scale,
+              double gain, std::size_t j0, std::size_t j1, float* value, float* sigma) noexcept {
+  if (gain > 0) {
+    for (std::size_t u = j0; u < j1; ++u) {
+      const double v = static_cast<double>(bg[u]) + ey * column_exp[u];
+      value[u] = static_cast<float>(v);
+      sigma[u] = static_cast<float>(std::sqrt(read * read + shot_scale * std::max(v, 0.0) / gain));
+    }
+  } else {
+    for (std::size_t u = j0; u < j1; ++u) {
+      const double v = static_cast<double>(bg[u]) + ey * column_exp[u];
+      value[u] = static_cast<float>(v);
+      sigma[u] = static_cast<float>(std::sqrt(read * read + 0.0));
+    }
+  }
 }
 
 template <typename F>
@@ -186,6 +258,7 @@ Renderer::Renderer(const Calibration& cal, const CameraParams& cam, const Sensor
   background_sigma_.resize(background_.size());
   for (std::size_t i = 0; i < background_.size(); ++i)
     background_sigma_[i] = static_cast<float>(pixel_sigma(static_cast<double>(background_[i])));
+  read_sigma_ = static_cast<float>(pixel_sigma(0.0));
 
   // The background bank (CameraParams::refresh_outside_disks), from its own generator.
   bank_rng_.reseed(noise_seed ^ 0xB4C6'0F5E'2A17'93D1ULL);
@@ -404,12 +477,9 @@ void Renderer::draw_gaussian(std::size_t k, double p, double cx, double cy) {
                   cache_sigma_.begin() + static_cast<std::ptrdiff_t>(row + j0));
       continue;
     }
-    for (int j = span.x0; j < span.x1; ++j) {
-      const auto u = static_cast<std::size_t>(j);
-      const double v = static_cast<double>(bg[u]) + ey * column_exp_[u];
-      cache_value_[row + u] = static_cast<float>(v);
-      cache_sigma_[row + u] = static_cast<float>(pixel_sigma(v));
-    }
+    spot_row(bg, column_exp_.data(), ey, scale_ * cam_.noise_sigma, scale_, cam_.shot_noise_gain,
+             static_cast<std::size_t>(span.x0), static_cast<std::size_t>(span.x1),
+             cache_value_.data() + row, cache_sigma_.data() + row);
   }
 }
 
@@ -522,26 +592,19 @@ void Renderer::noisy_box(std::size_t k, util::Random& rng, Image& out) const noe
   const std::size_t n = w * static_cast<std::size_t>(b.y1 - b.y0 + 1);
   const float* z = pool_.data() + rng.below(kPoolSize - n);
   const float* value = cache_value_.data() + b.offset;
-  const float* sigma = cache_sigma_.data() + b.offset;
+  // Without shot noise every pixel's sigma is the read noise's (pixel_sigma).
+  const bool one_sigma = !(cam_.shot_noise_gain > 0);
+  const float* sigma = one_sigma ? &read_sigma_ : cache_sigma_.data() + b.offset;
   const auto top = static_cast<float>(max_level_);
-  auto* base = reinterpret_cast<Pixel*>(out.bytes().data());
-  const Span* span = spans_.data() + b.span_offset;
-  for (int y = b.y0; y <= b.y1; ++y, ++span) {
-    // The pool offsets stay those of the whole box, so a disk pixel's noise does not depend on
-    // which pixels around it are drawn.
-    Pixel* row = base + static_cast<std::size_t>(y) * static_cast<std::size_t>(cam_.width) +
-                 static_cast<std::size_t>(b.x0);
-    // Bounds in locals: the pixel stores may alias anything (8-bit pixels), so a bound read
-    // through `span` would be reloaded every pixel and the loop left unvectorised.
-    const auto x_end = static_cast<std::size_t>(span->x1);
-    for (auto x = static_cast<std::size_t>(span->x0); x < x_end; ++x) {
-      // Round half up after clamping to the sensor's range (values are never negative here).
-      const float v = std::clamp(value[x] + sigma[x] * z[x], 0.0F, top);
-      row[x] = static_cast<Pixel>(v + 0.5F);
-    }
-    value += w;
-    sigma += w;
-    z += w;
+  const auto stride = static_cast<std::size_t>(cam_.width);
+  Pixel* row = reinterpret_cast<Pixel*>(out.bytes().data()) +
+               static_cast<std::size_t>(b.y0) * stride + static_cast<std::size_t>(b.x0);
+  const Span* spans = spans_.data() + b.span_offset;
+  const int rows = b.y1 - b.y0 + 1;
+  if constexpr (sizeof(Pixel) == 1) {
+    noisy_rows_u8(value, sigma, one_sigma, z, spans, rows, w, row, stride, top);
+  } else {
+    noisy_rows_u16(value, sigma, one_sigma, z, spans, rows, w, row, stride, top);
   }
 }
 

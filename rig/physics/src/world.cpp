@@ -31,6 +31,15 @@ bool hypot_exceeds(double a, double b, double limit) {
   return std::hypot(a, b) > limit;
 }
 
+// hypot(a, b) <= max(0, limit - hypot(c, d)) certainly, from the squares' roots: each within a
+// few ulps of its hypot (no underflow for a limit this far above it), so with a margin of 1e-9 of
+// the limit the direct forms decide the same. False where the roots cannot tell (the caller then
+// takes the direct forms).
+bool surely_within(double a, double b, double c, double d, double limit) {
+  return limit > 1e-100 &&
+         std::sqrt(a * a + b * b) + std::sqrt(c * c + d * d) < limit * (1.0 - 1e-9);
+}
+
 // Margin of the fingertips' bounding test (m): far above the rounding of a feeler's position.
 constexpr double kReachMargin = 1e-6;
 
@@ -480,10 +489,13 @@ void World::contact_forces(const BaseMotion& b, Vec3& force, double& torque, dou
         const Vec3 v_rel = relative_velocity(b, i, pe);
         const double fx = ct * dot(v_rel, t.x_f);
         const double fy = ct * dot(v_rel, t.y_f);
-        const double room =
-            std::max(0.0, p_.cap.friction * e.fn_n - std::hypot(e.ft_n[0], e.ft_n[1]));
-        const double damping = std::hypot(fx, fy);
-        const double scale = damping > room ? room / damping : 1.0;
+        const double cone = p_.cap.friction * e.fn_n;
+        double scale = 1.0;
+        if (!surely_within(fx, fy, e.ft_n[0], e.ft_n[1], cone)) {
+          const double room = std::max(0.0, cone - std::hypot(e.ft_n[0], e.ft_n[1]));
+          const double damping = std::hypot(fx, fy);
+          scale = damping > room ? room / damping : 1.0;
+        }
         f = f - (scale * fx) * t.x_f - (scale * fy) * t.y_f;
       }
       force = force + f;

@@ -115,51 +115,62 @@ INSTANTIATE_TEST_SUITE_P(BitDepthsAndModels, RenderMeasure,
                                            MeasureCase{8, ElementModel::kFeelers},
                                            MeasureCase{16, ElementModel::kFeelers}));
 
+// Read noise alone (every pixel the same sigma) and with shot noise (each pixel's sigma from its
+// value): the renderer takes a different path for each.
 TEST(Optics, NoiseHasTheStatedStatistics) {
-  CameraParams cam;
-  cam.noise_sigma = 3.0;
-  cam.shot_noise_gain = 0;
-  const Calibration cal = calibration(cam);
-  Renderer r(cal, cam, SensorOpticsParams{}, 5);
-  util::Random rng(9);
-  Image img;
-  std::vector<ElementLoad> loads(41);
-  // Pixels of the centre element's disk, over many frames: mean, sigma, frame-to-frame
-  // correlation.
-  const int frames = 400;
-  const Vec2 c = cal.elements[0].center_px;
-  std::vector<int> xs;
-  std::vector<int> ys;
-  for (int dy = -8; dy <= 8; dy += 2)
-    for (int dx = -8; dx <= 8; dx += 2) {
-      xs.push_back(static_cast<int>(c.x) + dx);
-      ys.push_back(static_cast<int>(c.y) + dy);
+  for (const double gain : {0.0, 10.0}) {
+    SCOPED_TRACE(gain);
+    CameraParams cam;
+    cam.noise_sigma = 3.0;
+    cam.shot_noise_gain = gain;
+    const Calibration cal = calibration(cam);
+    Renderer r(cal, cam, SensorOpticsParams{}, 5);
+    util::Random rng(9);
+    Image img;
+    std::vector<ElementLoad> loads(41);
+    // Pixels of the centre element's disk, over many frames: mean, sigma, frame-to-frame
+    // correlation.
+    const int frames = 400;
+    const Vec2 c = cal.elements[0].center_px;
+    std::vector<int> xs;
+    std::vector<int> ys;
+    for (int dy = -8; dy <= 8; dy += 2)
+      for (int dx = -8; dx <= 8; dx += 2) {
+        xs.push_back(static_cast<int>(c.x) + dx);
+        ys.push_back(static_cast<int>(c.y) + dy);
+      }
+    std::vector<double> sum(xs.size()), sum2(xs.size()), lag(xs.size()), prev(xs.size());
+    for (int f = 0; f < frames; ++f) {
+      r.render(loads, rng, img);
+      for (std::size_t i = 0; i < xs.size(); ++i) {
+        const double v = img.get(xs[i], ys[i]) - r.background_at(xs[i], ys[i]);
+        sum[i] += v;
+        sum2[i] += v * v;
+        if (f > 0) lag[i] += v * prev[i];
+        prev[i] = v;
+      }
     }
-  std::vector<double> sum(xs.size()), sum2(xs.size()), lag(xs.size()), prev(xs.size());
-  for (int f = 0; f < frames; ++f) {
-    r.render(loads, rng, img);
+    double mean = 0, var = 0, corr = 0, expected_var = 0;
     for (std::size_t i = 0; i < xs.size(); ++i) {
-      const double v = img.get(xs[i], ys[i]) - r.background_at(xs[i], ys[i]);
-      sum[i] += v;
-      sum2[i] += v * v;
-      if (f > 0) lag[i] += v * prev[i];
-      prev[i] = v;
+      mean += sum[i] / frames;
+      var += sum2[i] / frames;
+      corr += lag[i] / (frames - 1);
+      // Shot noise: variance value / gain (8-bit levels). Rounding adds 1/12.
+      const double shot = gain > 0 ? r.background_at(xs[i], ys[i]) / gain : 0.0;
+      expected_var += 9.0 + shot + 1.0 / 12;
     }
+    const auto n = static_cast<double>(xs.size());
+    mean /= n;
+    var /= n;
+    corr /= n;
+    expected_var /= n;
+    EXPECT_NEAR(mean, 0.0, 0.1);
+    EXPECT_NEAR(std::sqrt(var), std::sqrt(expected_var), 0.1);
+    if (gain > 0) {
+      EXPECT_GT(expected_var, 9.0 + 1.0 / 12 + 2.0);  // the shot noise shows
+    }
+    EXPECT_NEAR(corr / var, 0.0, 0.05);
   }
-  double mean = 0, var = 0, corr = 0;
-  for (std::size_t i = 0; i < xs.size(); ++i) {
-    mean += sum[i] / frames;
-    var += sum2[i] / frames;
-    corr += lag[i] / (frames - 1);
-  }
-  const auto n = static_cast<double>(xs.size());
-  mean /= n;
-  var /= n;
-  corr /= n;
-  EXPECT_NEAR(mean, 0.0, 0.1);
-  // Rounding adds 1/12 to the variance.
-  EXPECT_NEAR(std::sqrt(var), std::sqrt(9.0 + 1.0 / 12), 0.1);
-  EXPECT_NEAR(corr / var, 0.0, 0.05);
 }
 
 // The cameras' background outside the disks lives as a camera's does (fresh noise every frame,

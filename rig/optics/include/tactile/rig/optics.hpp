@@ -150,16 +150,17 @@ class Renderer {
   double pixel_sigma(double value_levels) const;
   double background_at(double x, double y) const;
 
+  // The columns [x0, x1) of a box row (box-relative) whose centres lie in the disk; empty when
+  // x0 == x1.
+  struct Span {
+    int x0, x1;
+  };
+
  private:
   struct Box {
     int x0, y0, x1, y1;       // inclusive
     std::size_t offset;       // into cache_
     std::size_t span_offset;  // into spans_: one span per row y0..y1
-  };
-  // The columns [x0, x1) of a box row (box-relative) whose centres lie in the disk; empty when
-  // x0 == x1.
-  struct Span {
-    int x0, x1;
   };
   void draw_spot(std::size_t k, const ElementLoad& load);
   void draw_gaussian(std::size_t k, double p, double cx, double cy);
@@ -188,6 +189,7 @@ class Renderer {
   std::vector<std::vector<double>> g_table_;
   std::vector<float> background_;
   std::vector<float> background_sigma_;  // pixel_sigma of each background pixel
+  float read_sigma_ = 0;                 // pixel_sigma of every pixel without shot noise
   // kBackgroundBank noisy background frames, rows of output pixels, and the generator that picks
   // a row from them: apart from the disks' noise, so the disks' pixels do not depend on it.
   std::vector<std::uint8_t> background_bank_;
