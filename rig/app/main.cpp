@@ -157,6 +157,10 @@ int run(int argc, char** argv) {
          "the controller's slip detector, paper, field or learned, overriding the scenario's "
          "controller.slip_detector (docs/slip.md)")
       ->check(tactile::cli::non_empty());
+  app.add_option("--sensor", sweep.sensor,
+                 "sweep: the sensor of every scenario, rig (the rig's Gaussian spot) or feelers "
+                 "(the paper's feeler element) (docs/slip.md)")
+      ->needs(sweep_opt);
   std::string grip;
   app.add_option("--grip", grip,
                  "the controller's grip, paper or margin, overriding the scenario's "
@@ -220,6 +224,12 @@ int run(int argc, char** argv) {
         }
       }
       sweep.grip = grip;
+      try {
+        tactile::rig::sweep::Draw check;
+        tactile::rig::sweep::apply_sensor_set(sweep.sensor, check);
+      } catch (const std::invalid_argument& e) {
+        throw tactile::cli::UsageError(std::string("--sensor: ") + e.what());
+      }
       tactile::util::install_stop_handlers();
       tactile::rig::sweep::run_sweep(sweep);
       // Cut short by a signal: the partial table is written, and the status says it is partial.

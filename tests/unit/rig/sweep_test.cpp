@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -239,6 +240,39 @@ std::string without_disturbance(std::string y) {
   const std::size_t crush = out.find("crush_force_n: ");
   if (crush != std::string::npos) out.erase(crush, out.find(", ", crush) + 2 - crush);
   return out;
+}
+
+// `--sensor feelers`: every scenario file names the feeler element and is otherwise the draw's,
+// byte for byte; "rig" leaves the file as drawn; other names are refused with the sets' names.
+TEST(SweepDraw, TheSensorSetChangesTheSensorAndNothingElse) {
+  for (std::uint64_t i = 0; i < 40; ++i) {
+    const sweep::Draw drawn = sweep::draw_scenario(20, i);
+    sweep::Draw rig = drawn;
+    sweep::apply_sensor_set("rig", rig);
+    EXPECT_EQ(sweep::scenario_yaml(rig), sweep::scenario_yaml(drawn));
+    sweep::Draw feelers = drawn;
+    sweep::apply_sensor_set("feelers", feelers);
+    const std::string yaml = sweep::scenario_yaml(feelers, 12.5);
+    const std::string line = "sensor: {element_model: feelers}\n";
+    const auto at = yaml.find(line);
+    ASSERT_NE(at, std::string::npos) << yaml;
+    EXPECT_EQ(std::string(yaml).erase(at, line.size()), sweep::scenario_yaml(drawn, 12.5));
+    const tactile::rig::Scenario s = tactile::rig::parse_scenario(yaml, "drawn.yaml");
+    EXPECT_EQ(s.optics.element_model, tactile::rig::ElementModel::kFeelers);
+    EXPECT_EQ(tactile::rig::parse_scenario(sweep::scenario_yaml(drawn), "drawn.yaml")
+                  .optics.element_model,
+              tactile::rig::ElementModel::kGaussian);
+  }
+  sweep::Draw d = sweep::draw_scenario(20, 0);
+  for (const char* bad : {"", "feeler", "gaussian", "Feelers"}) {
+    try {
+      sweep::apply_sensor_set(bad, d);
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(sweep::kSensorSetNames), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(std::string("'") + bad + "'"), std::string::npos);
+    }
+  }
 }
 
 TEST(SweepDraw, TheDisturbancesLeaveEveryOtherValueAsItWas) {

@@ -104,10 +104,20 @@ struct Draw {
   std::array<double, 3> direction{0, 0, -1};
   double after_s = 0;        // into kDisturbanceStage
   double crush_force_n = 0;  // 0: not fragile
+  // Not drawn: the sweep's sensor set (apply_sensor_set). true: the paper's feeler element
+  // (sensor.element_model: feelers) instead of the rig's Gaussian spot.
+  bool feelers = false;
 };
 
 // Scenario `index` of the sweep with seed `sweep_seed`: depends on nothing else. Pure.
 Draw draw_scenario(std::uint64_t sweep_seed, std::uint64_t index);
+
+// The sensor every scenario of a sweep sees (`rig --sweep --sensor NAME`, docs/slip.md): "rig",
+// the rig's own (the Gaussian spot; the files say nothing of the sensor), or "feelers", the paper's
+// feeler element on every scenario. Nothing of the draw changes. Throws std::invalid_argument
+// naming the sets for any other name.
+inline constexpr const char* kSensorSetNames = "rig or feelers";
+void apply_sensor_set(const std::string& name, Draw& d);
 
 // The drawn scenario as a scenario file (tactile-scenario/1), the controller's defaults (no
 // `controller` section, except lower_limit_m in a displaced-bottle case). max_sim_time_s > 0
@@ -175,6 +185,8 @@ struct SweepOptions {
   std::vector<std::string> detectors{"paper", "field", "learned"};
   // Every run's grip (`--grip NAME`, control::to_string names); empty: the scenario's.
   std::string grip;
+  // The sensor set (apply_sensor_set).
+  std::string sensor = "rig";
   // Keep the runs whose reports `out` holds from an earlier run of this sweep (one a signal or a
   // kill cut short; its scenario file must be this draw's) and run only the others.
   bool resume = false;
