@@ -23,6 +23,14 @@ double partial_expectation(double mu, double f, double sigma) {
   return d * cdf + sigma * pdf;
 }
 
+// A pixel's noise sigma at `value`: the read noise with, for gain > 0, the shot noise of variance
+// scale value / gain (Renderer::pixel_sigma; spot_row inlines it).
+[[gnu::always_inline]] inline double noise_sigma_at(double read, double scale, double gain,
+                                                    double value) noexcept {
+  const double shot = gain > 0 ? scale * std::max(value, 0.0) / gain : 0.0;
+  return std::sqrt(read * read + shot);
+}
+
 // One disk's pixels with their noise: value + sigma z, clamped to the sensor's range [0, top] and
 // rounded half up (values are never negative here). Rows y0..y1 of a box w wide, each written
 // over its span's columns only; the noise samples z keep the whole box's offsets, so a disk
@@ -74,23 +82,21 @@ void noisy_rows_u16(const float* value, const float* sigma, bool one_sigma, cons
 }
 
 // A Gaussian spot's row over its span [j0, j1): value = background + ey column_exp, and its noise
-// sigma, the read noise with the shot noise of the value (Renderer::pixel_sigma, the same
-// operations in the same order: shot_scale = scale, gain 0 for none).
+// sigma. The loop is written once per side of `gain > 0`, so that each, knowing it, vectorises.
 TACTILE_CLONES_SAME_BITS
-void spot_row(const float* bg, const double* column_exp, double ey, double read, double shot_scale,
+void spot_row(const float* bg, const double* column_exp, double ey, double read, double scale,
               double gain, std::size_t j0, std::size_t j1, float* value, float* sigma) noexcept {
+  const auto row = [&](double g) {
+    for (std::size_t u = j0; u < j1; ++u) {
+      const double v = static_cast<double>(bg[u]) + ey * column_exp[u];
+      value[u] = static_cast<float>(v);
+      sigma[u] = static_cast<float>(noise_sigma_at(read, scale, g, v));
+    }
+  };
   if (gain > 0) {
-    for (std::size_t u = j0; u < j1; ++u) {
-      const double v = static_cast<double>(bg[u]) + ey * column_exp[u];
-      value[u] = static_cast<float>(v);
-      sigma[u] = static_cast<float>(std::sqrt(read * read + shot_scale * std::max(v, 0.0) / gain));
-    }
+    row(gain);
   } else {
-    for (std::size_t u = j0; u < j1; ++u) {
-      const double v = static_cast<double>(bg[u]) + ey * column_exp[u];
-      value[u] = static_cast<float>(v);
-      sigma[u] = static_cast<float>(std::sqrt(read * read + 0.0));
-    }
+    row(0.0);
   }
 }
 
@@ -391,10 +397,7 @@ double Renderer::background_at(double x, double y) const {
 }
 
 double Renderer::pixel_sigma(double value_levels) const {
-  const double read = scale_ * cam_.noise_sigma;
-  const double shot =
-      cam_.shot_noise_gain > 0 ? scale_ * std::max(value_levels, 0.0) / cam_.shot_noise_gain : 0.0;
-  return std::sqrt(read * read + shot);
+  return noise_sigma_at(scale_ * cam_.noise_sigma, scale_, cam_.shot_noise_gain, value_levels);
 }
 
 double Renderer::expected_g(std::size_t k, double p) const {
