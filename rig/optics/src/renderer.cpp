@@ -59,21 +59,12 @@ template <bool kOneSigma, typename Pixel>
   }
 }
 
-TACTILE_CLONES_SAME_BITS
-void noisy_rows_u8(const float* value, const float* sigma, bool one_sigma, const float* z,
-                   const Renderer::Span* spans, int rows, std::size_t w, std::uint8_t* row,
-                   std::size_t stride, float top) noexcept {
-  if (one_sigma) {
-    noisy_rows<true>(value, sigma, z, spans, rows, w, row, stride, top);
-  } else {
-    noisy_rows<false>(value, sigma, z, spans, rows, w, row, stride, top);
-  }
-}
-
-TACTILE_CLONES_SAME_BITS
-void noisy_rows_u16(const float* value, const float* sigma, bool one_sigma, const float* z,
-                    const Renderer::Span* spans, int rows, std::size_t w, std::uint16_t* row,
-                    std::size_t stride, float top) noexcept {
+// noisy_rows for each pixel type, compiled for AVX2 and the baseline.
+template <typename Pixel>
+TACTILE_CLONES_SAME_BITS void noisy_pixels(const float* value, const float* sigma, bool one_sigma,
+                                           const float* z, const Renderer::Span* spans, int rows,
+                                           std::size_t w, Pixel* row, std::size_t stride,
+                                           float top) noexcept {
   if (one_sigma) {
     noisy_rows<true>(value, sigma, z, spans, rows, w, row, stride, top);
   } else {
@@ -604,11 +595,7 @@ void Renderer::noisy_box(std::size_t k, util::Random& rng, Image& out) const noe
                static_cast<std::size_t>(b.y0) * stride + static_cast<std::size_t>(b.x0);
   const Span* spans = spans_.data() + b.span_offset;
   const int rows = b.y1 - b.y0 + 1;
-  if constexpr (sizeof(Pixel) == 1) {
-    noisy_rows_u8(value, sigma, one_sigma, z, spans, rows, w, row, stride, top);
-  } else {
-    noisy_rows_u16(value, sigma, one_sigma, z, spans, rows, w, row, stride, top);
-  }
+  noisy_pixels(value, sigma, one_sigma, z, spans, rows, w, row, stride, top);
 }
 
 }  // namespace tactile::rig
