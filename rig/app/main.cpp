@@ -157,7 +157,8 @@ int run(int argc, char** argv) {
          "the controller's slip detector, paper, field or learned, overriding the scenario's "
          "controller.slip_detector (docs/slip.md)")
       ->check(tactile::cli::non_empty());
-  app.add_option("--sensor", sweep.sensor,
+  std::string sensor;
+  app.add_option("--sensor", sensor,
                  "sweep: the sensor of every scenario, rig (the rig's Gaussian spot) or feelers "
                  "(the paper's feeler element) (docs/slip.md)")
       ->needs(sweep_opt);
@@ -224,11 +225,14 @@ int run(int argc, char** argv) {
         }
       }
       sweep.grip = grip;
-      try {
-        tactile::rig::sweep::Draw check;
-        tactile::rig::sweep::apply_sensor_set(sweep.sensor, check);
-      } catch (const std::invalid_argument& e) {
-        throw tactile::cli::UsageError(std::string("--sensor: ") + e.what());
+      if (!sensor.empty()) {
+        const auto set = tactile::rig::sweep::sensor_set_from_string(sensor);
+        if (!set) {
+          throw tactile::cli::UsageError("--sensor must be " +
+                                         std::string(tactile::rig::sweep::kSensorSetNames) +
+                                         "; got '" + sensor + "'");
+        }
+        sweep.sensor = *set;
       }
       tactile::util::install_stop_handlers();
       tactile::rig::sweep::run_sweep(sweep);

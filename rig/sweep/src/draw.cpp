@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <stdexcept>
 
 #include "tactile/rig/scenario.hpp"
 #include "tactile/rig/sweep.hpp"
@@ -181,15 +180,10 @@ Draw draw_scenario(std::uint64_t sweep_seed, std::uint64_t index) {
   return d;
 }
 
-void apply_sensor_set(const std::string& name, Draw& d) {
-  if (name == "rig") {
-    d.feelers = false;
-  } else if (name == "feelers") {
-    d.feelers = true;
-  } else {
-    throw std::invalid_argument(
-        fmt::format("sensor set must be {}; got '{}'", kSensorSetNames, name));
-  }
+std::optional<SensorSet> sensor_set_from_string(std::string_view name) {
+  if (name == "rig") return SensorSet::kRig;
+  if (name == "feelers") return SensorSet::kFeelers;
+  return std::nullopt;
 }
 
 std::string scenario_yaml(const Draw& d, double max_sim_time_s) {
@@ -216,7 +210,7 @@ std::string scenario_yaml(const Draw& d, double max_sim_time_s) {
     y += fmt::format("controller: {{lower_limit_m: {}}}\n", kDisplacedLowerLimitM);
   }
   if (max_sim_time_s > 0) y += fmt::format("sim: {{max_time_s: {}}}\n", max_sim_time_s);
-  if (d.feelers) y += "sensor: {element_model: feelers}\n";
+  if (d.sensor == SensorSet::kFeelers) y += "sensor: {element_model: feelers}\n";
   // The disturbance and the fragility last, so that a file without them is the draw's without.
   if (d.disturbance != Disturbance::kNone) {
     y += fmt::format("# Disturbance ({}): timed from the carry (docs/slip.md).\n",

@@ -158,7 +158,7 @@ std::size_t run_sweep(const SweepOptions& o) {
   std::size_t kept = 0;
   for (const std::uint64_t i : indices) {
     draws[i] = draw_scenario(o.seed, i);
-    apply_sensor_set(o.sensor, draws[i]);
+    draws[i].sensor = o.sensor;
     const std::string yaml = scenario_yaml(draws[i], o.max_sim_time_s);
     const fs::path scenario = paths_of(o.out, i, o.scenarios, "").scenario;
     // --resume keeps a report only beside this draw's scenario file: not one of another sweep.

@@ -7,7 +7,9 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace tactile::rig::sweep {
@@ -72,6 +74,14 @@ inline constexpr double kKnockDurationS = 0.005;
 // grip_needed_N, the disturbance included).
 inline constexpr Range kCrushOverNeed{2.0, 6.0};
 
+// The sensor every scenario of a sweep sees (`rig --sweep --sensor NAME`, docs/slip.md): kRig,
+// the rig's own (the Gaussian spot; the files say nothing of the sensor), or kFeelers, the paper's
+// feeler element on every scenario (sensor.element_model: feelers). Nothing of the draw changes.
+enum class SensorSet { kRig, kFeelers };
+std::optional<SensorSet> sensor_set_from_string(std::string_view name);
+// The names sensor_set_from_string accepts, for error messages.
+inline constexpr const char* kSensorSetNames = "rig or feelers";
+
 // One drawn scenario. Values are rounded to a fixed grid (0.1 g, 0.01 mm, 0.001, 0.1 deg, 1 um,
 // 0.01 Hz, 0.01 levels, whole fps) so that the scenario file states them exactly.
 struct Draw {
@@ -104,20 +114,12 @@ struct Draw {
   std::array<double, 3> direction{0, 0, -1};
   double after_s = 0;        // into kDisturbanceStage
   double crush_force_n = 0;  // 0: not fragile
-  // Not drawn: the sweep's sensor set (apply_sensor_set). true: the paper's feeler element
-  // (sensor.element_model: feelers) instead of the rig's Gaussian spot.
-  bool feelers = false;
+  // Not drawn: the sweep's sensor set (SweepOptions::sensor).
+  SensorSet sensor = SensorSet::kRig;
 };
 
 // Scenario `index` of the sweep with seed `sweep_seed`: depends on nothing else. Pure.
 Draw draw_scenario(std::uint64_t sweep_seed, std::uint64_t index);
-
-// The sensor every scenario of a sweep sees (`rig --sweep --sensor NAME`, docs/slip.md): "rig",
-// the rig's own (the Gaussian spot; the files say nothing of the sensor), or "feelers", the paper's
-// feeler element on every scenario. Nothing of the draw changes. Throws std::invalid_argument
-// naming the sets for any other name.
-inline constexpr const char* kSensorSetNames = "rig or feelers";
-void apply_sensor_set(const std::string& name, Draw& d);
 
 // The drawn scenario as a scenario file (tactile-scenario/1), the controller's defaults (no
 // `controller` section, except lower_limit_m in a displaced-bottle case). max_sim_time_s > 0
@@ -185,8 +187,8 @@ struct SweepOptions {
   std::vector<std::string> detectors{"paper", "field", "learned"};
   // Every run's grip (`--grip NAME`, control::to_string names); empty: the scenario's.
   std::string grip;
-  // The sensor set (apply_sensor_set).
-  std::string sensor = "rig";
+  // The sensor every scenario sees (`--sensor NAME`).
+  SensorSet sensor = SensorSet::kRig;
   // Keep the runs whose reports `out` holds from an earlier run of this sweep (one a signal or a
   // kill cut short; its scenario file must be this draw's) and run only the others.
   bool resume = false;
