@@ -43,7 +43,8 @@ int run(int argc, char** argv) {
       "  rig --scenario FILE --write-configs DIR\n"
       "writes the sensors' calibrations and the configurations of sensor_node and hand_node for "
       "it.\n"
-      "  rig --sweep N --seed S --out DIR [--jobs J] [--shard K/N] [--resume]\n"
+      "  rig --sweep N --seed S --out DIR [--jobs J] [--shard K/N] [--resume] [--calibration "
+      "FILE]\n"
       "draws N random scenarios, runs each in lockstep in a child rig process and writes\n"
       "DIR/sweep.csv, summary.md and sweep.png (docs/slip.md).\n"
       "  rig --sweep-merge DIR... --out DIR\n"
@@ -162,6 +163,12 @@ int run(int argc, char** argv) {
                  "sweep: the sensor of every scenario, rig (the rig's Gaussian spot) or feelers "
                  "(the paper's feeler element) (docs/slip.md)")
       ->needs(sweep_opt);
+  std::string lab_calibration;
+  app.add_option("--calibration", lab_calibration,
+                 "sweep: a lab's calibration file (tactile-calibration/1) every scenario renders: "
+                 "its layout, curves, thresholds and image (docs/slip.md, \"Retraining for your "
+                 "own sensor\")")
+      ->needs(sweep_opt);
   std::string grip;
   app.add_option("--grip", grip,
                  "the controller's grip, paper or margin, overriding the scenario's "
@@ -234,6 +241,9 @@ int run(int argc, char** argv) {
         }
         sweep.sensor = *set;
       }
+      // Refused now, naming the file, not in every child.
+      if (!lab_calibration.empty())
+        sweep.lab_sensor = tactile::rig::load_lab_sensor(lab_calibration);
       tactile::util::install_stop_handlers();
       tactile::rig::sweep::run_sweep(sweep);
       // Cut short by a signal: the partial table is written, and the status says it is partial.

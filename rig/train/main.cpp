@@ -72,13 +72,14 @@ void load_rows(const std::vector<std::string>& files, rig::train::TrainingRows& 
     } else if (part.seeds != shared.seeds || part.scenarios != shared.scenarios ||
                part.max_time_s != shared.max_time_s || part.controller != shared.controller ||
                part.grip != shared.grip || part.features != shared.features ||
-               part.shards != shared.shards) {
+               part.shards != shared.shards || part.calibration != shared.calibration) {
       throw std::runtime_error(fmt::format(
-          "{}: seeds {}, {} scenarios, max time {}, controller {}, grip {}, {} shards; {} has "
-          "seeds {}, {}, {}, {}, {}, {}: not shards of one training",
+          "{}: seeds {}, {} scenarios, max time {}, controller {}, grip {}, calibration '{}', {} "
+          "shards; {} has seeds {}, {}, {}, {}, {}, '{}', {}: not shards of one training",
           files[f], fmt::join(part.seeds, ","), part.scenarios, part.max_time_s, part.controller,
-          part.grip, part.shards, files[0], fmt::join(shared.seeds, ","), shared.scenarios,
-          shared.max_time_s, shared.controller, shared.grip, shared.shards));
+          part.grip, part.calibration, part.shards, files[0], fmt::join(shared.seeds, ","),
+          shared.scenarios, shared.max_time_s, shared.controller, shared.grip, shared.calibration,
+          shared.shards));
     }
     if (part.features != control::kSlipFeatures) {
       throw std::runtime_error(fmt::format("{}: rows of {} features; this slip_train has {}",
@@ -147,7 +148,7 @@ int main(int argc, char** argv) {
       "common/control/src/slip_detector.cpp includes; rebuild to use it. Never train on the\n"
       "seeds the benchmark sweep is scored on. On a cluster: --shard K/N --rows-out FILE runs a\n"
       "share of the runs and writes their rows, --rows-in FILE... fits once from all shards'\n"
-      "rows (scripts/sweep-slurm train)."};
+      "rows (scripts/sweep-slurm train). For a lab's own sensor: --calibration FILE."};
   app.add_option("--seeds", seeds, "training sweep seeds, separated by commas")
       ->delimiter(',')
       ->check(CLI::Validator(
@@ -193,6 +194,11 @@ int main(int argc, char** argv) {
                  "scenarios under the margin grip, the even under the paper's)")
       ->check(CLI::IsMember({"paper", "margin", "mixed"}))
       ->capture_default_str();
+  std::string calibration;
+  app.add_option("--calibration", calibration,
+                 "a lab's calibration file (tactile-calibration/1): every training run's rig "
+                 "renders that sensor, its layout, curves, thresholds and image (docs/slip.md, "
+                 "\"Retraining for your own sensor\")");
   std::string shard;
   std::string rows_out;
   std::vector<std::string> rows_in;
@@ -219,6 +225,13 @@ int main(int argc, char** argv) {
     shared.controller = controller;
     shared.grip = grip;
     shared.features = control::kSlipFeatures;
+    // Refused now, naming the file, not in every run; the runs and the rows name it absolute.
+    std::optional<rig::LabSensor> lab_sensor;
+    if (!calibration.empty() && !*rows_in_opt) {
+      lab_sensor = rig::load_lab_sensor(calibration);
+      shared.calibration = lab_sensor->calibration;
+      calibration = shared.calibration;
+    }
     if (!shard.empty()) {
       if (!*rows_out_opt) throw tactile::cli::UsageError("--shard needs --rows-out");
       try {
@@ -232,7 +245,8 @@ int main(int argc, char** argv) {
     std::vector<Run> runs;
     std::vector<std::uint64_t> selected;
     if (*rows_in_opt) {
-      for (const char* name : {"--seeds", "--scenarios", "--max-time", "--controller", "--grip"}) {
+      for (const char* name :
+           {"--seeds", "--scenarios", "--max-time", "--controller", "--grip", "--calibration"}) {
         if (app.count(name) > 0)
           throw tactile::cli::UsageError(std::string("--rows-in takes no ") + name +
                                          ": the rows files say how they were made");
@@ -243,6 +257,7 @@ int main(int argc, char** argv) {
       max_time_s = shared.max_time_s;
       controller = shared.controller;
       grip = shared.grip;
+      calibration = shared.calibration;
     } else {
       for (const std::uint64_t s : seeds)
         for (std::uint64_t i = 0; i < scenarios; ++i)
@@ -256,7 +271,8 @@ int main(int argc, char** argv) {
         if (tactile::util::stop_requested()) return;
         Run& r = runs[selected[n]];
         try {
-          const rig::sweep::Draw d = rig::sweep::draw_scenario(r.seed, r.index);
+          rig::sweep::Draw d = rig::sweep::draw_scenario(r.seed, r.index);
+          d.lab_sensor = lab_sensor;
           rig::Scenario sc =
               rig::parse_scenario(rig::sweep::scenario_yaml(d, max_time_s),
                                   fmt::format("seed {} scenario {}", r.seed, r.index));
@@ -378,13 +394,14 @@ int main(int argc, char** argv) {
       decision = *decision_level;
     }
     const std::string training = fmt::format(
-        "slip_train --seeds {} --scenarios {} --trees {} --depth {} --learning-rate {}{}{}{}{}: "
+        "slip_train --seeds {} --scenarios {} --trees {} --depth {} --learning-rate {}{}{}{}{}{}: "
         "{} rows, decision {:.2f}",
         fmt::join(seeds, ","), scenarios, params.trees, params.depth, params.learning_rate,
         controller != "field" ? fmt::format(" --controller {}", controller) : std::string(),
         grip != "paper" ? fmt::format(" --grip {}", grip) : std::string(),
         max_time_s > 0 ? fmt::format(" --max-time {}", max_time_s) : std::string(),
         decision_level ? fmt::format(" --decision {}", *decision_level) : std::string(),
+        calibration.empty() ? std::string() : fmt::format(" --calibration {}", calibration),
         label.size(), decision);
     tactile::util::write_file_atomic(out, rig::train::model_source(model, decision, training));
     std::fprintf(stderr, "slip_train: wrote %s (%s)\n", out.c_str(), training.c_str());

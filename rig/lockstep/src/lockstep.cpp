@@ -352,6 +352,13 @@ std::string report_json(const Report& r) {
   // Only for a scenario with them: every other report keeps its bytes.
   if (r.disturbance) report["disturbance"] = disturbance_json(*r.disturbance);
   if (r.fragile) report["fragile"] = fragile_json(*r.fragile);
+  if (r.sensor) {
+    report["sensor"] = {{"calibration", r.sensor->calibration},
+                        {"image",
+                         {{"width", r.sensor->width},
+                          {"height", r.sensor->height},
+                          {"bit_depth", r.sensor->bit_depth}}}};
+  }
   ordered_json machine = nullptr;
   if (r.machine) {
     machine = {{"cpu_steal_pct", r.machine->steal_pct},

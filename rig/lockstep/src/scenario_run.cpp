@@ -60,6 +60,10 @@ ScenarioRun::ScenarioRun(const Scenario& sc, const CameraParams& camera, Lockste
   Report& rep = result_.report;
   rep.seed = sc.seed;
   rep.scenario_case = scenario_case(sc.world);
+  if (sc.calibration) {
+    const Calibration& c = sensors_.calibrations()[0];
+    rep.sensor = LabSensor{sc.calibration_file.string(), c.width, c.height, c.bit_depth};
+  }
   rep.hold = hold_need(sc.world, cfg_.f2_n);
   rep.end_reason = "max_time";
   scorer_.reserve(max_frames_ + 1);

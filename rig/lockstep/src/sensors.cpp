@@ -16,8 +16,16 @@ std::array<Calibration, kFingertips> simulated_calibrations(const Scenario& sc,
                                                             const CameraParams& camera,
                                                             std::span<const Vec3> normals) {
   std::array<Calibration, kFingertips> cals;
-  for (std::size_t i = 0; i < kFingertips; ++i)
-    cals[i] = make_calibration(kFingertipIds[i], camera, sc.optics, normals);
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    if (sc.calibration) {
+      // A lab's sensor (sensor.calibration): one file for both fingertips, each under its own
+      // id, as the rig's sensor_node and hand_node configurations name them.
+      cals[i] = *sc.calibration;
+      cals[i].sensor_id = kFingertipIds[i];
+    } else {
+      cals[i] = make_calibration(kFingertipIds[i], camera, sc.optics, normals);
+    }
+  }
   return cals;
 }
 

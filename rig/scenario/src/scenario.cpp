@@ -6,11 +6,13 @@
 #include <numbers>
 #include <string_view>
 
+#include "tactile/config/calibration_file.hpp"
 #include "tactile/config/controller_file.hpp"
 #include "tactile/config/yaml.hpp"
 #include "tactile/control/config.hpp"
 #include "tactile/control/types.hpp"
 #include "tactile/util/files.hpp"
+#include "tactile/util/log.hpp"
 #include "tactile/util/text.hpp"
 
 namespace tactile::rig {
@@ -190,8 +192,9 @@ void parse_fingertip(const Node& ft, FingertipParams& fp) {
 }
 
 void parse_optics(const Node& so, SensorOpticsParams& o) {
-  so.refuse_unknown_keys({"element_model", "mm_per_px", "disk_radius_px", "spot_peak_ref",
-                          "spot_sigma_min_px", "spot_sigma_max_px", "contact_on", "contact_off"});
+  so.refuse_unknown_keys({"element_model", "calibration", "mm_per_px", "disk_radius_px",
+                          "spot_peak_ref", "spot_sigma_min_px", "spot_sigma_max_px", "contact_on",
+                          "contact_off"});
   if (auto model = so.find("element_model")) {
     o.element_model =
         *element_model_from_string(choice(*model, element_model_from_string, kElementModelNames));
@@ -205,6 +208,41 @@ void parse_optics(const Node& so, SensorOpticsParams& o) {
     so["spot_sigma_max_px"].fail("must be at least spot_sigma_min_px");
   o.contact_on = want(so, "contact_on", o.contact_on, 1.0, 1e5);
   o.contact_off = want(so, "contact_off", o.contact_off, 0.0, o.contact_on);
+}
+
+std::string vector_text(Vec3 v) {
+  return "[" + number_text(v.x) + ", " + number_text(v.y) + ", " + number_text(v.z) + "]";
+}
+
+// sensor.calibration (docs/rig.md, "A lab's sensor"): the file's layout, curves, thresholds and
+// image instead of make_calibration's. The sensor keys that would set the same things are refused
+// beside it, and the camera's image must be the file's: nothing is silently overridden.
+void parse_lab_sensor(const Node& so, const Node& cam, Scenario& s) {
+  const auto file = so.find("calibration");
+  if (!file) return;
+  for (const char* key : {"mm_per_px", "disk_radius_px", "contact_on", "contact_off"}) {
+    if (auto k = so.find(key))
+      k->fail("is the calibration file's with sensor.calibration: remove it; is " + k->text());
+  }
+  std::filesystem::path path = file->as_string();
+  if (path.empty()) file->fail("must name a calibration file (tactile-calibration/1)");
+  if (path.is_relative()) path = std::filesystem::path(s.source).parent_path() / path;
+  try {
+    s.calibration = load_lab_calibration(path, s.world);
+  } catch (const config::ConfigError& e) {
+    file->fail(e.what());
+  }
+  s.calibration_file = path;
+  const Calibration& c = *s.calibration;
+  const std::array<std::pair<const char*, int>, 3> image{
+      {{"width", c.width}, {"height", c.height}, {"bit_depth", c.bit_depth}}};
+  const std::array<int, 3> camera{s.camera.width, s.camera.height, s.camera.bit_depth};
+  for (std::size_t i = 0; i < image.size(); ++i) {
+    if (camera[i] == image[i].second) continue;
+    const Node key = cam[image[i].first];
+    key.fail(std::string("must be the calibration's image.") + image[i].first + ", " +
+             std::to_string(image[i].second) + " (" + path.string() + "), is " + key.text());
+  }
 }
 
 void parse_sim(const Node& sim, Scenario& s) {
@@ -332,10 +370,55 @@ Scenario parse_scenario(const std::string& text, const std::string& source) {
   }
   if (auto ctl = root.find("controller")) parse_controller(*ctl, s);
   if (auto dist = root.find("disturbance")) parse_disturbance(*dist, s);
+  // Last: the world's fingertip (its normals) is complete.
+  if (auto so = root.find("sensor")) parse_lab_sensor(*so, root["camera"], s);
 
   // The fingertip's tangential law is the sensor's calibrated shear curve (see docs/rig.md).
-  s.world.fingertip.shear_curve = PiecewiseLinear({0.0, 0.02, 0.08}, {0.0, 0.05, 0.4});
+  s.world.fingertip.shear_curve = s.calibration
+                                      ? s.calibration->shear_curve
+                                      : PiecewiseLinear({0.0, 0.02, 0.08}, {0.0, 0.05, 0.4});
   return s;
+}
+
+void check_lab_calibration(const Calibration& cal, const std::string& source,
+                           std::span<const Vec3> world_normals) {
+  if (cal.elements.size() != world_normals.size()) {
+    throw config::ConfigError(
+        source + ": key 'elements': must hold the rig fingertip's " +
+        std::to_string(world_normals.size()) +
+        " elements (element k of the file is the fingertip's element k), holds " +
+        std::to_string(cal.elements.size()));
+  }
+  for (std::size_t k = 0; k < world_normals.size(); ++k) {
+    const Vec3 n = cal.elements[k].normal;
+    const Vec3 w = world_normals[k];
+    const double cosine = std::clamp(dot(n, w) / (norm(n) * norm(w)), -1.0, 1.0);
+    const double angle_deg = std::acos(cosine) * 180.0 / std::numbers::pi;
+    if (angle_deg <= kLabNormalToleranceDeg) continue;
+    throw config::ConfigError(
+        source + ": key 'elements[" + std::to_string(k) + "].normal': (element id " +
+        std::to_string(cal.elements[k].id) + ") is " + vector_text(n) + ", " +
+        number_text(std::round(angle_deg * 100.0) / 100.0) +
+        " deg from the rig fingertip's element " + std::to_string(k) + " " + vector_text(w) +
+        "; at most " + number_text(kLabNormalToleranceDeg) +
+        " deg (the elements in the fingertip's order: rings of 1, 8, 16, 16 at "
+        "fingertip.ring_polar_deg)");
+  }
+}
+
+Calibration load_lab_calibration(const std::filesystem::path& file, const WorldParams& world) {
+  std::vector<std::string> warnings;
+  Calibration cal = config::load_calibration(file, &warnings);
+  for (const std::string& w : warnings)
+    util::log_warn("{}", w);
+  check_lab_calibration(cal, file.string(), World(world).element_normals());
+  return cal;
+}
+
+LabSensor load_lab_sensor(const std::filesystem::path& file, const WorldParams& world) {
+  const std::filesystem::path absolute = std::filesystem::absolute(file);
+  const Calibration cal = load_lab_calibration(absolute, world);
+  return {absolute.string(), cal.width, cal.height, cal.bit_depth};
 }
 
 Scenario load_scenario(const std::filesystem::path& path) {

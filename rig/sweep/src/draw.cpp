@@ -1,5 +1,6 @@
 // The sweep's draw: pure, no I/O (docs/slip.md, "The sweep").
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -192,11 +193,13 @@ std::string scenario_yaml(const Draw& d, double max_sim_time_s) {
       "# Scenario {} of a random sweep (docs/slip.md): rig --lockstep --scenario THIS_FILE\n"
       "format: tactile-scenario/1\n"
       "seed: {}\n"
-      "camera: {{fps: {}, width: 640, height: 480, bit_depth: {}, noise_sigma: {}}}\n"
+      "camera: {{fps: {}, width: {}, height: {}, bit_depth: {}, noise_sigma: {}}}\n"
       "cap: {{mass_kg: {}, radius_mm: {}, friction: {}, kinetic_ratio: {}}}\n"
       "bottle: {{free_turn_deg: {}}}\n"
       "arm: {{vibration_mm: {}, vibration_hz: {}}}\n",
-      d.index, d.scenario_seed, d.fps, d.bit_depth, d.noise_sigma, d.mass_kg, d.radius_mm,
+      d.index, d.scenario_seed, d.fps, d.lab_sensor ? d.lab_sensor->width : 640,
+      d.lab_sensor ? d.lab_sensor->height : 480,
+      d.lab_sensor ? d.lab_sensor->bit_depth : d.bit_depth, d.noise_sigma, d.mass_kg, d.radius_mm,
       d.friction, d.kinetic_ratio, d.free_turn_deg, d.vibration_mm, d.vibration_hz);
   if (d.scenario_case == Case::kCapHeld) {
     y += "# Negative case: the cap is held to the table; no grasp may be classified on the lift.\n";
@@ -210,7 +213,16 @@ std::string scenario_yaml(const Draw& d, double max_sim_time_s) {
     y += fmt::format("controller: {{lower_limit_m: {}}}\n", kDisplacedLowerLimitM);
   }
   if (max_sim_time_s > 0) y += fmt::format("sim: {{max_time_s: {}}}\n", max_sim_time_s);
-  if (d.sensor == SensorSet::kFeelers) y += "sensor: {element_model: feelers}\n";
+  std::vector<std::string> sensor;
+  if (d.sensor == SensorSet::kFeelers) sensor.emplace_back("element_model: feelers");
+  if (d.lab_sensor) {
+    // Single-quoted: a path is any text, and YAML's single quotes escape only themselves.
+    std::string path;
+    for (const char c : d.lab_sensor->calibration)
+      path += c == '\'' ? std::string("''") : std::string(1, c);
+    sensor.push_back("calibration: '" + path + "'");
+  }
+  if (!sensor.empty()) y += fmt::format("sensor: {{{}}}\n", fmt::join(sensor, ", "));
   // The disturbance and the fragility last, so that a file without them is the draw's without.
   if (d.disturbance != Disturbance::kNone) {
     y += fmt::format("# Disturbance ({}): timed from the carry (docs/slip.md).\n",

@@ -159,6 +159,7 @@ std::size_t run_sweep(const SweepOptions& o) {
   for (const std::uint64_t i : indices) {
     draws[i] = draw_scenario(o.seed, i);
     draws[i].sensor = o.sensor;
+    draws[i].lab_sensor = o.lab_sensor;
     const std::string yaml = scenario_yaml(draws[i], o.max_sim_time_s);
     const fs::path scenario = paths_of(o.out, i, o.scenarios, "").scenario;
     // --resume keeps a report only beside this draw's scenario file: not one of another sweep.
@@ -255,7 +256,10 @@ std::size_t run_sweep(const SweepOptions& o) {
     util::log_info("sweep: {}/{} runs done, {} elapsed, about {} remaining", done, queue.size(),
                    duration_text(elapsed), duration_text(remaining));
   }
-  SweepInfo info{o.seed, o.scenarios, o.max_sim_time_s, o.shard, o.shards, stopped};
+  SweepInfo info{o.seed,           o.scenarios,
+                 o.max_sim_time_s, o.lab_sensor ? o.lab_sensor->calibration : std::string(),
+                 o.shard,          o.shards,
+                 stopped};
   if (stopped) util::log_warn("sweep: stopped; {} of {} runs done", done, queue.size());
   write_outputs(rows, info, o.out);
   return rows.size();
@@ -272,12 +276,14 @@ std::size_t merge_sweeps(const std::vector<fs::path>& dirs, const fs::path& out)
     if (d == 0) {
       merged = info;
     } else if (info.seed != merged.seed || info.scenarios != merged.scenarios ||
-               info.max_sim_time_s != merged.max_sim_time_s) {
+               info.max_sim_time_s != merged.max_sim_time_s ||
+               info.calibration != merged.calibration) {
       throw std::runtime_error(fmt::format(
-          "{}: seed {}, {} scenarios, time limit {} s; {} has seed {}, {} scenarios, {} s: not "
-          "shards of one sweep",
-          info_path.string(), info.seed, info.scenarios, info.max_sim_time_s, dirs[0].string(),
-          merged.seed, merged.scenarios, merged.max_sim_time_s));
+          "{}: seed {}, {} scenarios, time limit {} s, calibration '{}'; {} has seed {}, {} "
+          "scenarios, {} s, calibration '{}': not shards of one sweep",
+          info_path.string(), info.seed, info.scenarios, info.max_sim_time_s, info.calibration,
+          dirs[0].string(), merged.seed, merged.scenarios, merged.max_sim_time_s,
+          merged.calibration));
     }
     merged.stopped = merged.stopped || info.stopped;
     const fs::path csv = dirs[d] / "sweep.csv";

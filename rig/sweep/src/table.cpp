@@ -383,11 +383,13 @@ std::vector<Row> parse_csv(const std::string& text, const std::string& source) {
 }
 
 std::string info_json(const SweepInfo& info) {
-  const nlohmann::ordered_json j = {
+  nlohmann::ordered_json j = {
       {"format", "tactile-sweep/1"}, {"seed", info.seed},
       {"scenarios", info.scenarios}, {"max_sim_time_s", info.max_sim_time_s},
       {"shard", info.shard},         {"shards", info.shards},
       {"stopped", info.stopped}};
+  // Only for a lab's sensor: every other sweep.json keeps its bytes.
+  if (!info.calibration.empty()) j["calibration"] = info.calibration;
   return j.dump(2) + "\n";
 }
 
@@ -403,6 +405,7 @@ SweepInfo parse_info(const std::string& text, const std::string& source) {
     info.shard = need(j, "shard").get<int>();
     info.shards = need(j, "shards").get<int>();
     info.stopped = need(j, "stopped").get<bool>();
+    info.calibration = j.value("calibration", std::string());
     return info;
   } catch (const std::exception& e) {
     throw std::runtime_error(source + ": " + e.what());
@@ -414,6 +417,8 @@ std::string summary_markdown(const std::vector<Row>& rows, const SweepInfo& info
   if (info.max_sim_time_s > 0)
     out += fmt::format(", runs cut at {} s simulated", info.max_sim_time_s);
   out += "\n";
+  if (!info.calibration.empty())
+    out += fmt::format("\nEvery scenario renders the lab's sensor of `{}`.\n", info.calibration);
   if (info.stopped) out += "\nStopped by a signal before every scenario ran.\n";
   std::vector<std::string> methods;
   for (const Row& r : rows) {

@@ -53,16 +53,17 @@ class Reader {
 }  // namespace
 
 std::string rows_file(const TrainingRows& rows) {
-  const nlohmann::ordered_json header = {{"format", kFormat},
-                                         {"seeds", rows.seeds},
-                                         {"scenarios", rows.scenarios},
-                                         {"max_time_s", rows.max_time_s},
-                                         {"controller", rows.controller},
-                                         {"grip", rows.grip},
-                                         {"features", rows.features},
-                                         {"shard", rows.shard},
-                                         {"shards", rows.shards},
-                                         {"runs", rows.runs.size()}};
+  nlohmann::ordered_json header = {{"format", kFormat},
+                                   {"seeds", rows.seeds},
+                                   {"scenarios", rows.scenarios},
+                                   {"max_time_s", rows.max_time_s},
+                                   {"controller", rows.controller},
+                                   {"grip", rows.grip},
+                                   {"features", rows.features},
+                                   {"shard", rows.shard},
+                                   {"shards", rows.shards},
+                                   {"runs", rows.runs.size()}};
+  if (!rows.calibration.empty()) header["calibration"] = rows.calibration;
   std::string out = header.dump() + "\n";
   for (const RowsOfRun& r : rows.runs) {
     if (r.x.size() != r.label.size() * rows.features || r.weight.size() != r.label.size()) {
@@ -97,6 +98,7 @@ TrainingRows parse_rows_file(std::string_view bytes, const std::string& source) 
     rows.max_time_s = h.at("max_time_s").get<double>();
     rows.controller = h.at("controller").get<std::string>();
     rows.grip = h.value("grip", std::string("paper"));
+    rows.calibration = h.value("calibration", std::string());
     rows.features = h.at("features").get<std::size_t>();
     rows.shard = h.at("shard").get<int>();
     rows.shards = h.at("shards").get<int>();

@@ -263,13 +263,13 @@ TEST(CalibrateCliHelp, HelpListsTheStepsAndExitsZero) {
 const std::filesystem::path kSample =
     std::filesystem::path(TACTILE_SOURCE_DIR) / "tests/data/calibration";
 
-// The files the generator writes (the set without its walk-through script and README).
+// The files the generator writes (the set without its walk-through scripts and README).
 std::vector<std::filesystem::path> generated_files(const std::filesystem::path& dir) {
   std::vector<std::filesystem::path> out;
   for (const auto& e : std::filesystem::recursive_directory_iterator(dir)) {
     if (!e.is_regular_file()) continue;
     const auto name = e.path().filename().string();
-    if (name == "walkthrough.sh" || name == "README.md") continue;
+    if (name == "walkthrough.sh" || name == "retrain.sh" || name == "README.md") continue;
     out.push_back(std::filesystem::relative(e.path(), dir));
   }
   std::sort(out.begin(), out.end());
@@ -356,6 +356,80 @@ TEST(CalibrationSample, TheWalkThroughRunsEndToEndAndRecoversTheRigsSensor) {
     ++rows;
   }
   EXPECT_EQ(rows, 41);
+}
+
+// "Retraining for your own sensor" (docs/calibration.md, docs/slip.md), its exact commands
+// (retrain.sh) after the walk-through's: the sweep's scenarios and reports are the fitted file's
+// sensor (its image, named in the scenario file and the report), and slip_train writes a model
+// that says it was trained on that file.
+TEST(CalibrationSample, TheRetrainingWalkThroughRunsTheRigOnTheFittedSensor) {
+  testing::TempDir dir;
+  std::filesystem::copy(kSample, dir.path(), std::filesystem::copy_options::recursive);
+  std::string path;
+  for (const char* program :
+       {TACTILE_CALIBRATE_PATH, TACTILE_EXTRACT_PATH, TACTILE_RIG_PATH, TACTILE_SLIP_TRAIN_PATH})
+    path += std::filesystem::path(program).parent_path().string() + ":";
+  const auto r = testing::run(
+      {"/bin/sh", "-c", "cd \"$0\" && PATH=\"$1$PATH\" && sh walkthrough.sh && sh retrain.sh",
+       dir.path().string(), path},
+      std::chrono::seconds(240));
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+
+  const std::filesystem::path fitted = std::filesystem::absolute(dir / "left.yaml");
+  const Calibration c = config::load_calibration(fitted);
+  const std::string image = "width: " + std::to_string(c.width) +
+                            ", height: " + std::to_string(c.height) +
+                            ", bit_depth: " + std::to_string(c.bit_depth);
+  for (const char* n : {"00000", "00001"}) {
+    const std::string scenario = read_text(dir / "sweep/scenarios" / (std::string(n) + ".yaml"));
+    EXPECT_THAT(scenario, HasSubstr(image)) << scenario;
+    EXPECT_THAT(scenario, HasSubstr("calibration: '" + fitted.string() + "'")) << scenario;
+    const std::string report =
+        read_text(dir / "sweep/reports" / (std::string(n) + "-learned.json"));
+    EXPECT_THAT(report, HasSubstr("\"calibration\": \"" + fitted.string() + "\"")) << report;
+    EXPECT_THAT(report, HasSubstr("\"width\": " + std::to_string(c.width))) << report;
+    EXPECT_THAT(report, HasSubstr("\"end_reason\"")) << report;
+  }
+  const std::string csv = read_text(dir / "sweep/sweep.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3) << csv;  // header and two runs
+  EXPECT_THAT(read_text(dir / "sweep/sweep.json"), HasSubstr(fitted.string()));
+
+  const std::string model = read_text(dir / "slip_model.inc");
+  EXPECT_THAT(model, HasSubstr("--calibration " + fitted.string()));
+  EXPECT_THAT(model, HasSubstr("decision"));
+
+  // The same training in two shards: each shard's runs render the file, and the rows fit to the
+  // same model.
+  const std::vector<std::string> training{TACTILE_SLIP_TRAIN_PATH,
+                                          "--calibration",
+                                          fitted.string(),
+                                          "--seeds",
+                                          "105",
+                                          "--scenarios",
+                                          "2",
+                                          "--max-time",
+                                          "6",
+                                          "--trees",
+                                          "4",
+                                          "--depth",
+                                          "3",
+                                          "--jobs",
+                                          "2"};
+  std::vector<std::string> fit{
+      TACTILE_SLIP_TRAIN_PATH,        "--trees",  "4", "--depth", "3", "--out",
+      (dir / "sharded.inc").string(), "--rows-in"};
+  for (const char* shard : {"1/2", "2/2"}) {
+    std::vector<std::string> args = training;
+    const std::string rows = (dir / (std::string("rows-") + shard[0])).string();
+    args.insert(args.end(), {"--shard", shard, "--rows-out", rows});
+    const auto s = testing::run(args, std::chrono::seconds(60));
+    ASSERT_EQ(s.exit_code, 0) << describe(s);
+    EXPECT_THAT(read_text(rows).substr(0, 400), HasSubstr(fitted.string()));
+    fit.push_back(rows);
+  }
+  const auto f = testing::run(fit, std::chrono::seconds(60));
+  ASSERT_EQ(f.exit_code, 0) << describe(f);
+  EXPECT_EQ(read_text(dir / "sharded.inc"), model);
 }
 
 }  // namespace

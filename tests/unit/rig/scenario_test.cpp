@@ -6,13 +6,17 @@
 
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <set>
 #include <string>
 #include <vector>
 
+#include "tactile/config/calibration_file.hpp"
 #include "tactile/config/controller_file.hpp"
 #include "tactile/config/yaml.hpp"
 #include "tactile/control/config.hpp"
+#include "tactile/rig/sensors.hpp"
+#include "tactile/util/files.hpp"
 
 namespace tactile::rig {
 namespace {
@@ -270,6 +274,110 @@ TEST(Scenario, SensorElementModelIsANameItKnows) {
   EXPECT_NE(e.find("sensor.element_model"), std::string::npos) << e;
   EXPECT_NE(e.find("conical"), std::string::npos) << e;
   EXPECT_NE(e.find("gaussian or feelers"), std::string::npos) << e;
+}
+
+// --- a lab's sensor: sensor.calibration (docs/rig.md, "A lab's sensor") ------------------------
+
+// A lab's file: the rig's own sensor scaled to a 352 x 352 camera (the sample set's), its normals
+// the world's.
+Calibration lab_calibration() {
+  CameraParams cam;
+  cam.width = 352;
+  cam.height = 352;
+  return make_calibration("lab", cam, SensorOpticsParams{}, World(WorldParams{}).element_normals());
+}
+
+// A file written into the test's own temporary folder.
+std::filesystem::path lab_file(const std::string& name, const Calibration& cal) {
+  const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / "lab_sensor";
+  std::filesystem::create_directories(dir);
+  config::save_calibration(dir / name, cal);
+  return dir / name;
+}
+
+std::string lab_scenario(const std::string& calibration, const std::string& camera_size) {
+  std::string text = kMinimal;
+  text.replace(text.find("width: 640, height: 480"), 23, camera_size);
+  return text + "sensor: {calibration: '" + calibration + "'}\n";
+}
+
+TEST(ScenarioLabSensor, TheFileIsTheSensorBothFingertipsRenderAndTheShearLaw) {
+  Calibration lab = lab_calibration();
+  lab.shear_curve = PiecewiseLinear({0.0, 0.03, 0.09}, {0.0, 0.06, 0.5});
+  lab.noise_floor = 7.5;
+  const std::filesystem::path file = lab_file("lab.yaml", lab);
+  const Scenario s =
+      parse_scenario(lab_scenario(file.string(), "width: 352, height: 352"), "s.yaml");
+  ASSERT_TRUE(s.calibration);
+  EXPECT_EQ(s.calibration_file, file);
+  EXPECT_EQ(s.world.fingertip.shear_curve.odd(0.05), lab.shear_curve.odd(0.05));
+  const auto cals = simulated_calibrations(s, s.camera, World(s.world).element_normals());
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    EXPECT_EQ(cals[i].sensor_id, kFingertipIds[i]);
+    EXPECT_EQ(cals[i].width, 352);
+    EXPECT_EQ(cals[i].noise_floor, 7.5);
+    ASSERT_EQ(cals[i].elements.size(), lab.elements.size());
+    for (std::size_t k = 0; k < lab.elements.size(); ++k) {
+      EXPECT_EQ(cals[i].elements[k].center_px.x, lab.elements[k].center_px.x) << k;
+      EXPECT_EQ(cals[i].elements[k].center_px.y, lab.elements[k].center_px.y) << k;
+    }
+  }
+  // A relative path is the scenario file's neighbour.
+  const std::filesystem::path scenario = file.parent_path() / "lab-scenario.yaml";
+  util::write_file_atomic(scenario, lab_scenario("lab.yaml", "width: 352, height: 352"));
+  EXPECT_EQ(load_scenario(scenario).calibration_file, file);
+  // Without the key: the rig's own sensor, as before.
+  EXPECT_FALSE(parse_scenario(kMinimal, "s.yaml").calibration);
+}
+
+TEST(ScenarioLabSensor, FilesTheFingertipCannotRenderAreRefusedNamingFileKeyAndValue) {
+  const std::string size = "width: 352, height: 352";
+  // Missing.
+  const std::string missing =
+      (std::filesystem::path(::testing::TempDir()) / "no-such.yaml").string();
+  std::string e = error_of(lab_scenario(missing, size));
+  EXPECT_NE(e.find("s.yaml:7: key 'sensor.calibration'"), std::string::npos) << e;
+  EXPECT_NE(e.find(missing + ": cannot open"), std::string::npos) << e;
+
+  // Another element count.
+  Calibration fewer = lab_calibration();
+  fewer.elements.pop_back();
+  const std::string fewer_file = lab_file("fewer.yaml", fewer).string();
+  e = error_of(lab_scenario(fewer_file, size));
+  EXPECT_NE(e.find("key 'sensor.calibration'"), std::string::npos) << e;
+  EXPECT_NE(e.find(fewer_file + ": key 'elements': must hold the rig fingertip's 41 elements"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find("holds 40"), std::string::npos) << e;
+
+  // A normal on another ring: element 12 (ring 2, polar 20 degrees) looking along the axis.
+  Calibration tilted = lab_calibration();
+  tilted.elements[12].normal = {0.0, 0.0, 1.0};
+  const std::string tilted_file = lab_file("tilted.yaml", tilted).string();
+  e = error_of(lab_scenario(tilted_file, size));
+  EXPECT_NE(e.find(tilted_file + ": key 'elements[12].normal': (element id 12) is [0, 0, 1], 20 " +
+                   "deg from the rig fingertip's element 12"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find("at most 5 deg"), std::string::npos) << e;
+  // Within the tolerance: taken (element 12 turned 10 degrees about the axis is 3.4 degrees off).
+  Calibration turned = lab_calibration();
+  Vec3& n = turned.elements[12].normal;
+  const double a = 10.0 * std::numbers::pi / 180.0;
+  n = {n.x * std::cos(a) - n.y * std::sin(a), n.x * std::sin(a) + n.y * std::cos(a), n.z};
+  EXPECT_NO_THROW(
+      check_lab_calibration(turned, "turned.yaml", World(WorldParams{}).element_normals()));
+
+  // The camera's image is the file's, not overridden.
+  const std::string lab = lab_file("lab.yaml", lab_calibration()).string();
+  e = error_of(lab_scenario(lab, "width: 640, height: 352"));
+  EXPECT_NE(e.find("s.yaml:3: key 'camera.width': must be the calibration's image.width, 352 (" +
+                   lab + "), is '640'"),
+            std::string::npos)
+      << e;
+  // The sensor keys the file sets are refused beside it.
+  e = error_of(kMinimal + "sensor: {calibration: '" + lab + "', mm_per_px: 0.03}\n");
+  EXPECT_NE(e.find("key 'sensor.mm_per_px': is the calibration file's"), std::string::npos) << e;
 }
 
 }  // namespace

@@ -269,6 +269,40 @@ TEST(SweepDraw, TheSensorSetChangesTheSensorAndNothingElse) {
     EXPECT_FALSE(sweep::sensor_set_from_string(bad).has_value()) << "accepted '" << bad << "'";
 }
 
+// `--calibration FILE` (docs/slip.md, "Retraining for your own sensor"): every scenario's camera
+// takes the file's image and its sensor section names the file (quoted as YAML quotes it, beside
+// the feeler element when both are asked); nothing else of the draw changes. sweep.json says the
+// file only when there is one.
+TEST(SweepDraw, ALabSensorTakesTheImageAndNamesTheFileAndNothingElse) {
+  const tactile::rig::LabSensor lab{"/labs/o'brien/left.yaml", 352, 288, 16};
+  for (std::uint64_t i = 0; i < 40; ++i) {
+    const sweep::Draw drawn = sweep::draw_scenario(20, i);
+    EXPECT_FALSE(drawn.lab_sensor.has_value());
+    sweep::Draw labs = drawn;
+    labs.lab_sensor = lab;
+    std::string yaml = sweep::scenario_yaml(labs, 12.5);
+    const std::string line = "sensor: {calibration: '/labs/o''brien/left.yaml'}\n";
+    const auto at = yaml.find(line);
+    ASSERT_NE(at, std::string::npos) << yaml;
+    yaml.erase(at, line.size());
+    const std::string image = "width: 352, height: 288, bit_depth: 16";
+    const auto camera = yaml.find(image);
+    ASSERT_NE(camera, std::string::npos) << yaml;
+    yaml.replace(camera, image.size(),
+                 "width: 640, height: 480, bit_depth: " + std::to_string(drawn.bit_depth));
+    EXPECT_EQ(yaml, sweep::scenario_yaml(drawn, 12.5));
+    labs.sensor = sweep::SensorSet::kFeelers;
+    EXPECT_NE(sweep::scenario_yaml(labs).find(
+                  "sensor: {element_model: feelers, calibration: '/labs/o''brien/left.yaml'}\n"),
+              std::string::npos);
+  }
+  sweep::SweepInfo info;
+  info.seed = 20;
+  EXPECT_EQ(sweep::info_json(info).find("calibration"), std::string::npos);
+  info.calibration = lab.calibration;
+  EXPECT_EQ(sweep::parse_info(sweep::info_json(info), "sweep.json").calibration, lab.calibration);
+}
+
 TEST(SweepDraw, TheDisturbancesLeaveEveryOtherValueAsItWas) {
   std::uint64_t hash = 0xcbf29ce484222325ULL;
   bool new_keys = false;
@@ -965,6 +999,18 @@ TEST(Sweep, ResumeRunsOnlyTheRunsAStopLeftWithoutAReportToTheSameTable) {
   ASSERT_EQ(again.exit_code, 0) << again.err;
   EXPECT_NE(again.err.find("resuming: 4 runs kept from their reports, 0 to run"), std::string::npos)
       << again.err;
+}
+
+// A lab's file the rig's fingertip cannot render (or none) is refused before any scenario runs,
+// naming the file: exit 1, nothing written.
+TEST(Sweep, ALabCalibrationIsRefusedAtStartUpNamingTheFile) {
+  TempDir dir;
+  const std::string missing = (dir / "no-such.yaml").string();
+  const ProcessResult r =
+      rig({"--sweep", "3", "--out", (dir / "x").string(), "--calibration", missing});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find(missing + ": cannot open"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "x"));
 }
 
 TEST(Sweep, UsageErrorsExit2) {

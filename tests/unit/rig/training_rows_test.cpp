@@ -69,6 +69,18 @@ TEST(TrainingRows, RoundTripsBitForBit) {
   EXPECT_EQ(train::rows_file(back), bytes);
 }
 
+// slip_train --calibration: the header says the lab's file, and a file without one has no key
+// (its bytes as before).
+TEST(TrainingRows, TheLabsCalibrationRoundTripsAndIsAbsentWithoutOne) {
+  train::TrainingRows rows = sample();
+  EXPECT_EQ(train::rows_file(rows).find("calibration"), std::string::npos);
+  EXPECT_EQ(train::parse_rows_file(train::rows_file(rows), "x.rows").calibration, "");
+  rows.calibration = "/labs/left.yaml";
+  const std::string bytes = train::rows_file(rows);
+  EXPECT_EQ(train::parse_rows_file(bytes, "x.rows").calibration, "/labs/left.yaml");
+  EXPECT_EQ(train::rows_file(train::parse_rows_file(bytes, "x.rows")), bytes);
+}
+
 TEST(TrainingRows, EveryCutAndAnyTrailingByteIsRefusedNamingTheFile) {
   const std::string bytes = train::rows_file(sample());
   for (std::size_t n = 0; n < bytes.size(); ++n) {

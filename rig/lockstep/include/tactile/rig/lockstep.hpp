@@ -170,6 +170,9 @@ struct Report {
   // `completed` and `negative_case_passed` stay the controller's decisions. Absent: no key.
   std::optional<CrushTruth> fragile;
   GripMetrics grip;
+  // A lab's sensor (the scenario's sensor.calibration), written as `sensor`: the file and the
+  // image it gave the cameras. Absent: no key, the rig's own sensor.
+  std::optional<LabSensor> sensor;
   // The controller the run scored: its slip detector and its grip (control::to_string of the
   // scenario's controller configuration), written as `controller`, before `grip` and
   // `recompressions_by_stage`.

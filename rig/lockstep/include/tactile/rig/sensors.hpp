@@ -21,7 +21,8 @@ namespace tactile::rig {
 // The fingertips' sensor ids, in fingertip order.
 inline constexpr std::array<const char*, kFingertips> kFingertipIds{"left", "right"};
 
-// The two simulated sensors' calibrations for this scenario and camera.
+// The two simulated sensors' calibrations for this scenario and camera: make_calibration's, or
+// the scenario's sensor.calibration under each fingertip's id.
 std::array<Calibration, kFingertips> simulated_calibrations(const Scenario& scenario,
                                                             const CameraParams& camera,
                                                             std::span<const Vec3> normals);

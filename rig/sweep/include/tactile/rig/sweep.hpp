@@ -12,6 +12,8 @@
 #include <string_view>
 #include <vector>
 
+#include "tactile/rig/scenario.hpp"
+
 namespace tactile::rig::sweep {
 
 // A closed interval a drawn parameter lies in.
@@ -114,8 +116,11 @@ struct Draw {
   std::array<double, 3> direction{0, 0, -1};
   double after_s = 0;        // into kDisturbanceStage
   double crush_force_n = 0;  // 0: not fragile
-  // Not drawn: the sweep's sensor set (SweepOptions::sensor).
+  // Not drawn: the sweep's sensor set (SweepOptions::sensor), and a lab's sensor
+  // (SweepOptions::lab_sensor): the camera's image becomes the file's, the bit depth drawn above
+  // unused, and the file says sensor.calibration.
   SensorSet sensor = SensorSet::kRig;
+  std::optional<LabSensor> lab_sensor;
 };
 
 // Scenario `index` of the sweep with seed `sweep_seed`: depends on nothing else. Pure.
@@ -158,6 +163,7 @@ struct SweepInfo {
   std::uint64_t seed = 0;
   std::uint64_t scenarios = 0;  // N drawn, over all shards
   double max_sim_time_s = 0;    // 0: the scenarios' own limit
+  std::string calibration;      // a lab's sensor (--calibration, absolute); empty: the rig's
   int shard = 1;                // K of shards
   int shards = 1;
   bool stopped = false;  // stopped by a signal before every scenario ran
@@ -189,6 +195,8 @@ struct SweepOptions {
   std::string grip;
   // The sensor every scenario sees (`--sensor NAME`).
   SensorSet sensor = SensorSet::kRig;
+  // A lab's sensor every scenario renders (`--calibration FILE`, rig::load_lab_sensor).
+  std::optional<LabSensor> lab_sensor;
   // Keep the runs whose reports `out` holds from an earlier run of this sweep (one a signal or a
   // kill cut short; its scenario file must be this draw's) and run only the others.
   bool resume = false;

@@ -32,6 +32,9 @@ struct TrainingRows {
   // The grip of the training runs: paper, margin, or mixed (the odd scenarios of each seed under
   // the margin grip, the even under the paper's). Files without the key were made with paper.
   std::string grip = "paper";
+  // A lab's sensor the runs rendered (slip_train --calibration, absolute); empty: the rig's own.
+  // Written only when set, so files without it keep their bytes.
+  std::string calibration;
   std::size_t features = 0;
   int shard = 1;  // K of shards
   int shards = 1;
