@@ -130,6 +130,15 @@ if [ "$state" != idle ]; then
 fi
 say "a one-host cluster is up (node $node)"
 
+# A lab's calibration file that is not there: a usage error before anything is submitted.
+set +e
+bash "$src/scripts/sweep-slurm" sweep --scenarios 2 --seed 23 --shards 2 --out "$work/nofile" \
+  --rig "$rig" --calibration "$work/no-such.yaml" 2>"$work/nofile.log"
+rc=$?
+set -e
+[ "$rc" = 2 ] && grep -q "no-such.yaml" "$work/nofile.log" ||
+  fail "sweep-slurm --calibration of a missing file: exit $rc, $(cat "$work/nofile.log")"
+
 # --- the sweep ----------------------------------------------------------------------------------
 sweep=(--scenarios 6 --seed 23 --max-sim-time 6 --detectors paper)
 "$rig" --sweep 6 --seed 23 --max-sim-time 6 --detectors paper --jobs 2 --out "$work/whole" \
