@@ -188,6 +188,8 @@ std::optional<SensorSet> sensor_set_from_string(std::string_view name) {
 }
 
 std::string scenario_yaml(const Draw& d, double max_sim_time_s) {
+  // The camera's image: the rig's 640 x 480 at the drawn depth, or a lab's sensor's own.
+  const LabSensor image = d.lab_sensor.value_or(LabSensor{"", 640, 480, d.bit_depth});
   // {} writes the shortest text that reads back as the same double: the file is the draw.
   std::string y = fmt::format(
       "# Scenario {} of a random sweep (docs/slip.md): rig --lockstep --scenario THIS_FILE\n"
@@ -197,10 +199,9 @@ std::string scenario_yaml(const Draw& d, double max_sim_time_s) {
       "cap: {{mass_kg: {}, radius_mm: {}, friction: {}, kinetic_ratio: {}}}\n"
       "bottle: {{free_turn_deg: {}}}\n"
       "arm: {{vibration_mm: {}, vibration_hz: {}}}\n",
-      d.index, d.scenario_seed, d.fps, d.lab_sensor ? d.lab_sensor->width : 640,
-      d.lab_sensor ? d.lab_sensor->height : 480,
-      d.lab_sensor ? d.lab_sensor->bit_depth : d.bit_depth, d.noise_sigma, d.mass_kg, d.radius_mm,
-      d.friction, d.kinetic_ratio, d.free_turn_deg, d.vibration_mm, d.vibration_hz);
+      d.index, d.scenario_seed, d.fps, image.width, image.height, image.bit_depth, d.noise_sigma,
+      d.mass_kg, d.radius_mm, d.friction, d.kinetic_ratio, d.free_turn_deg, d.vibration_mm,
+      d.vibration_hz);
   if (d.scenario_case == Case::kCapHeld) {
     y += "# Negative case: the cap is held to the table; no grasp may be classified on the lift.\n";
     y.replace(y.find("kinetic_ratio: "), 0, "held_to_table: true, ");
