@@ -275,12 +275,13 @@ Outcome HandNode::run() {
     // The loop's one reading of the clock this turn: everything below decides on it.
     const std::int64_t woke = util::monotonic_ns();
     // Back more than a control period later than asked since the last turn began: this process
-    // did not run (not scheduled, stopped). Frames sent meanwhile may still be on their way
-    // through ZeroMQ's I/O thread: the time-driven step (which judges staleness) waits for one
-    // more short poll.
-    const bool overslept =
-        woke - now - std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count() >
-        period_ns_;
+    // did not run (not scheduled, stopped). Frames sent meanwhile wait in its socket or are still
+    // on their way through ZeroMQ's I/O thread: staleness does not count the time away, and the
+    // time-driven step (which judges it) waits for one more short poll.
+    const std::int64_t away_ns =
+        woke - now - std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count();
+    const bool overslept = away_ns > period_ns_;
+    if (overslept) freshness_.not_running(away_ns);
     now = woke;
     while (sub_.receive(msg_, std::chrono::milliseconds(0)))
       on_topic_message(now);

@@ -1,9 +1,9 @@
 #pragma once
 
 // Whether each fingertip's tactile data is fresh enough to act on (docs/hand_node.md "The
-// loop"): a fingertip without a whole frame for controller.stale_after_s is stale (the
-// controller holds), and a fingertip whose frames stopped is not waited for when its partner's
-// frame comes (a dead sensor).
+// loop"): a fingertip without a whole frame for controller.stale_after_s of hand_node's running
+// time is stale (the controller holds), and a fingertip whose frames stopped is not waited for when
+// its partner's frame comes (a dead sensor).
 //
 // Pure: time is an argument, nothing allocates, nothing throws.
 #include <array>
@@ -25,6 +25,15 @@ class TactileFreshness {
   }
 
   bool has_frame(std::size_t k) const noexcept { return has_frame_[k]; }
+
+  // hand_node did not run for away_ns (not scheduled, stopped): frames sent meanwhile wait in its
+  // socket, so their absence here is no sign the sensor stopped. Staleness counts the time it ran:
+  // each fingertip's last arrival moves on by the time it was away.
+  void not_running(std::int64_t away_ns) noexcept {
+    for (std::size_t k = 0; k < 2; ++k) {
+      if (has_frame_[k]) arrived_ns_[k] += away_ns;
+    }
+  }
 
   // No whole frame yet, or none for longer than stale_after_s.
   bool stale(std::size_t k, std::int64_t now_ns) const noexcept {

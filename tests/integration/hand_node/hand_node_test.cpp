@@ -752,12 +752,22 @@ TEST(HandNode, AnswersEveryArmStateReportingTheDeadmanHoldWithTheMotionAgain) {
   EXPECT_EQ(r.process.exit_code, 0) << r.process.err;
   EXPECT_EQ(r.events.back(), v1::EVENT_KIND_DONE) << r.process.err;
   EXPECT_EQ(transports, 3) << r.process.err;  // its own and one per report
-  ASSERT_GE(commands.size(), before + 4);
+  // Each report is answered by the MoveTo and its finger velocities back to back; frames go on
+  // meanwhile, and a re-compression's finger velocities may come before or between the answers
+  // (one stop's CI saw MoveTo, velocities, velocities, MoveTo, velocities under ASan).
   using K = control::CommandKind;
-  EXPECT_EQ(std::vector<K>(commands.begin() + static_cast<std::ptrdiff_t>(before),
-                           commands.begin() + static_cast<std::ptrdiff_t>(before + 4)),
-            (std::vector<K>{K::kMoveTo, K::kFingerVelocities, K::kMoveTo, K::kFingerVelocities}))
-      << r.process.err;
+  std::vector<std::size_t> answers;
+  for (std::size_t i = before; i < commands.size() && answers.size() < 2; ++i) {
+    if (commands[i] == K::kFingerVelocities) continue;
+    EXPECT_EQ(commands[i], K::kMoveTo) << "command " << i << "\n" << r.process.err;
+    answers.push_back(i);
+  }
+  ASSERT_EQ(answers.size(), 2U) << r.process.err;
+  for (const std::size_t i : answers) {
+    ASSERT_LT(i + 1, commands.size()) << r.process.err;
+    EXPECT_EQ(commands[i + 1], K::kFingerVelocities) << "command " << i + 1 << "\n"
+                                                     << r.process.err;
+  }
   const std::string warning = "the arm controller's deadman held the arm: resuming";
   const auto first = r.process.err.find(warning);
   ASSERT_NE(first, std::string::npos) << r.process.err;

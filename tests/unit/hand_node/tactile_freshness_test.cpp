@@ -1,6 +1,7 @@
 // TactileFreshness: a fingertip is stale before its first whole frame and once none came for
-// stale_after_s; a fingertip is waited for when its frames came lately here or its last one left
-// sensor_node shortly before its partner's (frames queued while hand_node did not run).
+// stale_after_s of hand_node's running time; a fingertip is waited for when its frames came lately
+// here or its last one left sensor_node shortly before its partner's (frames queued while hand_node
+// did not run).
 #include "tactile_freshness.hpp"
 
 #include <gtest/gtest.h>
@@ -34,6 +35,24 @@ TEST(TactileFreshness, StaleBeforeTheFirstFrameAndOnceNoneCameForStaleAfter) {
   f.arrived(0, 140 * kMs, 135 * kMs);
   EXPECT_FALSE(f.stale(0, 140 * kMs));
   EXPECT_TRUE(f.has_frame(0));
+  EXPECT_FALSE(f.has_frame(1));
+}
+
+TEST(TactileFreshness, TimeHandNodeDidNotRunIsNotCountedTowardsStaleness) {
+  // The stop of a CI run: fingertip 0's last frame came at 100 ms, then hand_node was stopped
+  // for 60 ms (twice stale_after_s) and woke at 165 ms before ZeroMQ's I/O thread had handed it
+  // the frames queued meanwhile.
+  TactileFreshness f(kStale);
+  f.arrived(0, 100 * kMs, 95 * kMs);
+  EXPECT_TRUE(f.stale(0, 165 * kMs)) << "counting the time away";
+  f.not_running(60 * kMs);
+  EXPECT_FALSE(f.stale(0, 165 * kMs));
+  EXPECT_FALSE(f.stale(0, 190 * kMs)) << "30 ms of running time since its last frame";
+  EXPECT_TRUE(f.stale(0, 191 * kMs)) << "a sensor that stopped is stale stale_after_s on";
+  EXPECT_TRUE(f.live(0, 185 * kMs, 500 * kMs)) << "and worth waiting for until then";
+  EXPECT_FALSE(f.live(0, 191 * kMs, 500 * kMs));
+  // A fingertip that never sent a frame stays stale.
+  EXPECT_TRUE(f.stale(1, 165 * kMs));
   EXPECT_FALSE(f.has_frame(1));
 }
 
