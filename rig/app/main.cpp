@@ -160,8 +160,9 @@ int run(int argc, char** argv) {
       ->check(tactile::cli::non_empty());
   std::string sensor;
   app.add_option("--sensor", sensor,
-                 "sweep: the sensor of every scenario, rig (the rig's Gaussian spot) or feelers "
-                 "(the paper's feeler element) (docs/slip.md)")
+                 "sweep: the sensor of every scenario, rig (the rig's Gaussian spot), feelers "
+                 "(the paper's feeler element) or drawn (one drawn per scenario: element, "
+                 "stiffness, spot, shot noise, calibration error) (docs/slip.md)")
       ->needs(sweep_opt);
   std::string lab_calibration;
   app.add_option("--calibration", lab_calibration,

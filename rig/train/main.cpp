@@ -63,6 +63,10 @@ void load_rows(const std::vector<std::string>& files, rig::train::TrainingRows& 
   for (std::size_t f = 0; f < files.size(); ++f) {
     rig::train::TrainingRows part =
         rig::train::parse_rows_file(tactile::util::read_file(files[f]), files[f]);
+    if (!rig::sweep::sensor_set_from_string(part.sensor)) {
+      throw std::runtime_error(fmt::format("{}: sensor '{}', not {}", files[f], part.sensor,
+                                           rig::sweep::kSensorSetNames));
+    }
     if (f == 0) {
       shared = part;
       for (const std::uint64_t s : shared.seeds)
@@ -72,14 +76,16 @@ void load_rows(const std::vector<std::string>& files, rig::train::TrainingRows& 
     } else if (part.seeds != shared.seeds || part.scenarios != shared.scenarios ||
                part.max_time_s != shared.max_time_s || part.controller != shared.controller ||
                part.grip != shared.grip || part.features != shared.features ||
-               part.shards != shared.shards || part.calibration != shared.calibration) {
+               part.shards != shared.shards || part.calibration != shared.calibration ||
+               part.sensor != shared.sensor) {
       throw std::runtime_error(fmt::format(
-          "{}: seeds {}, {} scenarios, max time {}, controller {}, grip {}, calibration '{}', {} "
-          "shards; {} has seeds {}, {}, {}, {}, {}, '{}', {}: not shards of one training",
+          "{}: seeds {}, {} scenarios, max time {}, controller {}, grip {}, calibration '{}', "
+          "sensor {}, {} shards; {} has seeds {}, {}, {}, {}, {}, '{}', {}, {}: not shards of one "
+          "training",
           files[f], fmt::join(part.seeds, ","), part.scenarios, part.max_time_s, part.controller,
-          part.grip, part.calibration, part.shards, files[0], fmt::join(shared.seeds, ","),
-          shared.scenarios, shared.max_time_s, shared.controller, shared.grip, shared.calibration,
-          shared.shards));
+          part.grip, part.calibration, part.sensor, part.shards, files[0],
+          fmt::join(shared.seeds, ","), shared.scenarios, shared.max_time_s, shared.controller,
+          shared.grip, shared.calibration, shared.sensor, shared.shards));
     }
     if (part.features != control::kSlipFeatures) {
       throw std::runtime_error(fmt::format("{}: rows of {} features; this slip_train has {}",
@@ -148,7 +154,8 @@ int main(int argc, char** argv) {
       "common/control/src/slip_detector.cpp includes; rebuild to use it. Never train on the\n"
       "seeds the benchmark sweep is scored on. On a cluster: --shard K/N --rows-out FILE runs a\n"
       "share of the runs and writes their rows, --rows-in FILE... fits once from all shards'\n"
-      "rows (scripts/sweep-slurm train). For a lab's own sensor: --calibration FILE."};
+      "rows (scripts/sweep-slurm train). For a lab's own sensor: --calibration FILE; for a\n"
+      "sensor drawn per scenario (a model that survives another sensor): --sensor drawn."};
   app.add_option("--seeds", seeds, "training sweep seeds, separated by commas")
       ->delimiter(',')
       ->check(CLI::Validator(
@@ -199,6 +206,13 @@ int main(int argc, char** argv) {
                  "a lab's calibration file (tactile-calibration/1): every training run's rig "
                  "renders that sensor, its layout, curves, thresholds and image (docs/slip.md, "
                  "\"Retraining for your own sensor\")");
+  std::string sensor = "rig";
+  app.add_option("--sensor", sensor,
+                 "the sensor of the training runs, as rig --sweep --sensor: rig (the rig's "
+                 "Gaussian spot), feelers (the paper's feeler element) or drawn (one drawn per "
+                 "scenario) (docs/slip.md, \"The drawn sensor\")")
+      ->check(CLI::IsMember({"rig", "feelers", "drawn"}))
+      ->capture_default_str();
   std::string shard;
   std::string rows_out;
   std::vector<std::string> rows_in;
@@ -224,6 +238,7 @@ int main(int argc, char** argv) {
     shared.max_time_s = max_time_s;
     shared.controller = controller;
     shared.grip = grip;
+    shared.sensor = sensor;
     shared.features = control::kSlipFeatures;
     // Refused now, naming the file, not in every run; the runs and the rows name it absolute.
     std::optional<rig::LabSensor> lab_sensor;
@@ -245,8 +260,8 @@ int main(int argc, char** argv) {
     std::vector<Run> runs;
     std::vector<std::uint64_t> selected;
     if (*rows_in_opt) {
-      for (const char* name :
-           {"--seeds", "--scenarios", "--max-time", "--controller", "--grip", "--calibration"}) {
+      for (const char* name : {"--seeds", "--scenarios", "--max-time", "--controller", "--grip",
+                               "--calibration", "--sensor"}) {
         if (app.count(name) > 0)
           throw tactile::cli::UsageError(std::string("--rows-in takes no ") + name +
                                          ": the rows files say how they were made");
@@ -258,6 +273,7 @@ int main(int argc, char** argv) {
       controller = shared.controller;
       grip = shared.grip;
       calibration = shared.calibration;
+      sensor = shared.sensor;
     } else {
       for (const std::uint64_t s : seeds)
         for (std::uint64_t i = 0; i < scenarios; ++i)
@@ -273,6 +289,7 @@ int main(int argc, char** argv) {
         try {
           rig::sweep::Draw d = rig::sweep::draw_scenario(r.seed, r.index);
           d.lab_sensor = lab_sensor;
+          d.sensor = *rig::sweep::sensor_set_from_string(sensor);
           rig::Scenario sc =
               rig::parse_scenario(rig::sweep::scenario_yaml(d, max_time_s),
                                   fmt::format("seed {} scenario {}", r.seed, r.index));
@@ -394,7 +411,8 @@ int main(int argc, char** argv) {
       decision = *decision_level;
     }
     const std::string training = fmt::format(
-        "slip_train --seeds {} --scenarios {} --trees {} --depth {} --learning-rate {}{}{}{}{}{}: "
+        "slip_train --seeds {} --scenarios {} --trees {} --depth {} --learning-rate "
+        "{}{}{}{}{}{}{}: "
         "{} rows, decision {:.2f}",
         fmt::join(seeds, ","), scenarios, params.trees, params.depth, params.learning_rate,
         controller != "field" ? fmt::format(" --controller {}", controller) : std::string(),
@@ -402,7 +420,8 @@ int main(int argc, char** argv) {
         max_time_s > 0 ? fmt::format(" --max-time {}", max_time_s) : std::string(),
         decision_level ? fmt::format(" --decision {}", *decision_level) : std::string(),
         calibration.empty() ? std::string() : fmt::format(" --calibration {}", calibration),
-        label.size(), decision);
+        sensor != "rig" ? fmt::format(" --sensor {}", sensor) : std::string(), label.size(),
+        decision);
     tactile::util::write_file_atomic(out, rig::train::model_source(model, decision, training));
     std::fprintf(stderr, "slip_train: wrote %s (%s)\n", out.c_str(), training.c_str());
     return 0;

@@ -1,5 +1,9 @@
 #include "tactile/rig/sensors.hpp"
 
+#include <fmt/format.h>
+
+#include <stdexcept>
+
 #include "tactile/config/calibration_file.hpp"
 #include "tactile/util/random.hpp"
 
@@ -12,9 +16,9 @@ double visible_fz_n(const Calibration& cal) {
 
 }  // namespace
 
-std::array<Calibration, kFingertips> simulated_calibrations(const Scenario& sc,
-                                                            const CameraParams& camera,
-                                                            std::span<const Vec3> normals) {
+std::array<Calibration, kFingertips> rendered_calibrations(const Scenario& sc,
+                                                           const CameraParams& camera,
+                                                           std::span<const Vec3> normals) {
   std::array<Calibration, kFingertips> cals;
   for (std::size_t i = 0; i < kFingertips; ++i) {
     if (sc.calibration) {
@@ -24,6 +28,24 @@ std::array<Calibration, kFingertips> simulated_calibrations(const Scenario& sc,
       cals[i].sensor_id = kFingertipIds[i];
     } else {
       cals[i] = make_calibration(kFingertipIds[i], camera, sc.optics, normals);
+    }
+  }
+  return cals;
+}
+
+std::array<Calibration, kFingertips> simulated_calibrations(const Scenario& sc,
+                                                            const CameraParams& camera,
+                                                            std::span<const Vec3> normals) {
+  std::array<Calibration, kFingertips> cals = rendered_calibrations(sc, camera, normals);
+  for (Calibration& cal : cals) {
+    cal = as_calibrated(cal, sc.optics);
+    try {
+      validate(cal);
+    } catch (const CalibrationError& e) {
+      throw std::runtime_error(fmt::format(
+          "{}: sensor.layout_offset_px [{}, {}] moves {}'s calibration off its image: {}",
+          sc.source, sc.optics.layout_offset_px.x, sc.optics.layout_offset_px.y, cal.sensor_id,
+          e.what()));
     }
   }
   return cals;
@@ -41,13 +63,14 @@ std::vector<std::filesystem::path> save_calibrations(
 
 SimulatedSensors::SimulatedSensors(const Scenario& sc, const CameraParams& camera,
                                    std::span<const Vec3> normals)
-    : calibrations_(simulated_calibrations(sc, camera, normals)),
+    : rendered_(rendered_calibrations(sc, camera, normals)),
+      calibrations_(simulated_calibrations(sc, camera, normals)),
       frame_rng_{util::Random(util::splitmix64(sc.seed * 4 + 1)),
                  util::Random(util::splitmix64(sc.seed * 4 + 2))},
-      truth_(visible_fz_n(calibrations_[0]), sc.partial_slip_ratio),
+      truth_(visible_fz_n(rendered_[0]), sc.partial_slip_ratio),
       element_model_(sc.optics.element_model) {
   for (std::size_t i = 0; i < kFingertips; ++i)
-    renderers_.emplace_back(calibrations_[i], camera, sc.optics,
+    renderers_.emplace_back(rendered_[i], camera, sc.optics,
                             util::splitmix64(sc.seed * 4 + 3 + i * 7919));
 }
 
@@ -62,7 +85,7 @@ const Image& SimulatedSensors::render(std::size_t i, const FingertipTruth& truth
 
 void SimulatedSensors::image_truth(std::size_t i, FingertipTruth& truth) const {
   if (element_model_ != ElementModel::kFeelers) return;
-  const Calibration& cal = calibrations_[i];
+  const Calibration& cal = rendered_[i];  // the truth is the sensor's, not its calibration's
   for (std::size_t k = 0; k < kElementsPerFingertip; ++k) {
     const Vec2 c = renderers_[i].noiseless_centroid_px(k);
     truth.elements[k].ux_mm = (c.x - cal.elements[k].zero_px.x) * cal.mm_per_px;

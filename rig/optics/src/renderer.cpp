@@ -183,6 +183,25 @@ double level_scale(int bit_depth) {
   return bit_depth == 16 ? 257.0 : 1.0;
 }
 
+Calibration as_calibrated(const Calibration& truth, const SensorOpticsParams& opt) {
+  Calibration cal = truth;
+  const auto scaled = [](const PiecewiseLinear& c, double error) {
+    std::vector<double> y(c.y().begin(), c.y().end());
+    for (double& v : y)
+      v *= 1.0 + error;
+    return PiecewiseLinear(std::vector<double>(c.x().begin(), c.x().end()), std::move(y));
+  };
+  if (opt.normal_curve_error != 0)
+    cal.normal_curve = scaled(truth.normal_curve, opt.normal_curve_error);
+  if (opt.shear_curve_error != 0)
+    cal.shear_curve = scaled(truth.shear_curve, opt.shear_curve_error);
+  for (ElementCalibration& e : cal.elements) {
+    e.center_px = {e.center_px.x + opt.layout_offset_px.x, e.center_px.y + opt.layout_offset_px.y};
+    e.zero_px = {e.zero_px.x + opt.layout_offset_px.x, e.zero_px.y + opt.layout_offset_px.y};
+  }
+  return cal;
+}
+
 Calibration make_calibration(const std::string& sensor_id, const CameraParams& cam,
                              const SensorOpticsParams& opt, std::span<const Vec3> normals) {
   std::size_t expected = 0;

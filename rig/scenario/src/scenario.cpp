@@ -194,7 +194,8 @@ void parse_fingertip(const Node& ft, FingertipParams& fp) {
 void parse_optics(const Node& so, SensorOpticsParams& o) {
   so.refuse_unknown_keys({"element_model", "calibration", "mm_per_px", "disk_radius_px",
                           "spot_peak_ref", "spot_sigma_min_px", "spot_sigma_max_px", "contact_on",
-                          "contact_off"});
+                          "contact_off", "normal_curve_error", "shear_curve_error",
+                          "layout_offset_px"});
   if (auto model = so.find("element_model")) {
     o.element_model =
         *element_model_from_string(choice(*model, element_model_from_string, kElementModelNames));
@@ -208,6 +209,18 @@ void parse_optics(const Node& so, SensorOpticsParams& o) {
     so["spot_sigma_max_px"].fail("must be at least spot_sigma_min_px");
   o.contact_on = want(so, "contact_on", o.contact_on, 1.0, 1e5);
   o.contact_off = want(so, "contact_off", o.contact_off, 0.0, o.contact_on);
+  o.normal_curve_error = want(so, "normal_curve_error", o.normal_curve_error, -0.5, 0.5);
+  o.shear_curve_error = want(so, "shear_curve_error", o.shear_curve_error, -0.5, 0.5);
+  if (auto offset = so.find("layout_offset_px")) {
+    const std::vector<double> v = offset->as_doubles();
+    if (v.size() != 2) offset->fail("must be [dx, dy] in pixels");
+    for (const double d : v) {
+      if (!(std::abs(d) <= 5.0)) {
+        offset->fail("must be within [-5, 5] px each, is " + number_text(d));
+      }
+    }
+    o.layout_offset_px = {v[0], v[1]};
+  }
 }
 
 std::string vector_text(Vec3 v) {

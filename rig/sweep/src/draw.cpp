@@ -95,6 +95,28 @@ void draw_disturbance(std::uint64_t sweep_seed, std::uint64_t index, Draw& d) {
   }
 }
 
+// The drawn sensor of scenario `index` (Draw's drawn_sensor), from a generator of its own: every
+// other value of the draw is untouched by it. Every number is drawn, in a fixed order.
+DrawnSensor draw_sensor(std::uint64_t sweep_seed, std::uint64_t index) {
+  constexpr std::uint64_t kSalt = 0x73656e736f722121ULL;  // "sensor!!"
+  util::Random rng(util::splitmix64(util::splitmix64(sweep_seed ^ kSalt) ^ index));
+  const auto hundredths = [&](Range r) {
+    return on_grid(rng, {r.lo * 100, r.hi * 100}, 1.0) / 100;
+  };
+  DrawnSensor s;
+  s.feelers = rng.uniform() < kFeelerShare;
+  s.normal_stiffness_n_per_mm = hundredths(kStiffnessNPerMm);
+  s.spot_scale = hundredths(kSpotScale);
+  const bool shot = rng.uniform() < kShotNoiseShare;
+  const double gain = on_grid(rng, {kShotNoiseGain.lo * 10, kShotNoiseGain.hi * 10}, 1.0) / 10;
+  s.shot_noise_gain = shot ? gain : 0.0;
+  s.normal_curve_error = on_grid(rng, {kCurveError.lo * 1000, kCurveError.hi * 1000}, 1.0) / 1000;
+  s.shear_curve_error = on_grid(rng, {kCurveError.lo * 1000, kCurveError.hi * 1000}, 1.0) / 1000;
+  s.layout_offset_x_px = hundredths(kLayoutOffsetPx);
+  s.layout_offset_y_px = hundredths(kLayoutOffsetPx);
+  return s;
+}
+
 // The disturbance's section of the scenario file.
 std::string disturbance_yaml(const Draw& d) {
   const std::string direction =
@@ -178,12 +200,14 @@ Draw draw_scenario(std::uint64_t sweep_seed, std::uint64_t index) {
   d.displaced_x_mm = std::round(distance * std::cos(direction) * 10.0) / 10.0 + 0.0;
   d.displaced_y_mm = std::round(distance * std::sin(direction) * 10.0) / 10.0 + 0.0;
   draw_disturbance(sweep_seed, index, d);
+  d.drawn_sensor = draw_sensor(sweep_seed, index);
   return d;
 }
 
 std::optional<SensorSet> sensor_set_from_string(std::string_view name) {
   if (name == "rig") return SensorSet::kRig;
   if (name == "feelers") return SensorSet::kFeelers;
+  if (name == "drawn") return SensorSet::kDrawn;
   return std::nullopt;
 }
 
@@ -216,6 +240,24 @@ std::string scenario_yaml(const Draw& d, double max_sim_time_s) {
   if (max_sim_time_s > 0) y += fmt::format("sim: {{max_time_s: {}}}\n", max_sim_time_s);
   std::vector<std::string> sensor;
   if (d.sensor == SensorSet::kFeelers) sensor.emplace_back("element_model: feelers");
+  if (d.sensor == SensorSet::kDrawn) {
+    const DrawnSensor& ds = d.drawn_sensor;
+    const SensorOpticsParams rig;  // the rig's spot widths, scaled
+    if (ds.shot_noise_gain > 0) {
+      y.replace(y.find("noise_sigma: "), 0,
+                fmt::format("shot_noise_gain: {}, ", ds.shot_noise_gain));
+    }
+    y +=
+        fmt::format("fingertip: {{normal_stiffness_n_per_mm: {}}}\n", ds.normal_stiffness_n_per_mm);
+    sensor.emplace_back(ds.feelers ? "element_model: feelers" : "element_model: gaussian");
+    sensor.push_back(fmt::format("spot_sigma_min_px: {}, spot_sigma_max_px: {}",
+                                 rounded(rig.spot_sigma_min_px * ds.spot_scale, 1e4),
+                                 rounded(rig.spot_sigma_max_px * ds.spot_scale, 1e4)));
+    sensor.push_back(fmt::format("normal_curve_error: {}, shear_curve_error: {}",
+                                 ds.normal_curve_error, ds.shear_curve_error));
+    sensor.push_back(
+        fmt::format("layout_offset_px: [{}, {}]", ds.layout_offset_x_px, ds.layout_offset_y_px));
+  }
   if (d.lab_sensor) {
     // Single-quoted: a path is any text, and YAML's single quotes escape only themselves.
     std::string path;

@@ -43,6 +43,19 @@ Row drawn_row(const Draw& d, const std::string& method) {
   set("noise_sigma", fmt::format("{}", d.noise_sigma));
   set("fps", fmt::format("{}", d.fps));
   set("bit_depth", fmt::format("{}", d.bit_depth));
+  const bool drawn = d.sensor == SensorSet::kDrawn;
+  const DrawnSensor& ds = d.drawn_sensor;
+  const bool feelers = d.sensor == SensorSet::kFeelers || (drawn && ds.feelers);
+  set("element_model", feelers ? "feelers" : "gaussian");
+  if (drawn) {
+    set("normal_stiffness_n_per_mm", fmt::format("{}", ds.normal_stiffness_n_per_mm));
+    set("spot_scale", fmt::format("{}", ds.spot_scale));
+    set("shot_noise_gain", fmt::format("{}", ds.shot_noise_gain));
+    set("normal_curve_error", fmt::format("{}", ds.normal_curve_error));
+    set("shear_curve_error", fmt::format("{}", ds.shear_curve_error));
+    set("layout_offset_x_px", fmt::format("{}", ds.layout_offset_x_px));
+    set("layout_offset_y_px", fmt::format("{}", ds.layout_offset_y_px));
+  }
   set("disturbance", to_string(d.disturbance));
   if (d.crush_force_n > 0) set("crush_force_N", fmt::format("{}", d.crush_force_n));
   return row;
@@ -183,6 +196,14 @@ const std::vector<std::string>& columns() {
                                           "noise_sigma",
                                           "fps",
                                           "bit_depth",
+                                          "element_model",
+                                          "normal_stiffness_n_per_mm",
+                                          "spot_scale",
+                                          "shot_noise_gain",
+                                          "normal_curve_error",
+                                          "shear_curve_error",
+                                          "layout_offset_x_px",
+                                          "layout_offset_y_px",
                                           "exit_status",
                                           "completed",
                                           "end_reason",

@@ -64,6 +64,7 @@ std::string rows_file(const TrainingRows& rows) {
                                    {"shards", rows.shards},
                                    {"runs", rows.runs.size()}};
   if (!rows.calibration.empty()) header["calibration"] = rows.calibration;
+  if (rows.sensor != "rig") header["sensor"] = rows.sensor;
   std::string out = header.dump() + "\n";
   for (const RowsOfRun& r : rows.runs) {
     if (r.x.size() != r.label.size() * rows.features || r.weight.size() != r.label.size()) {
@@ -99,6 +100,7 @@ TrainingRows parse_rows_file(std::string_view bytes, const std::string& source) 
     rows.controller = h.at("controller").get<std::string>();
     rows.grip = h.value("grip", std::string("paper"));
     rows.calibration = h.value("calibration", std::string());
+    rows.sensor = h.value("sensor", std::string("rig"));
     rows.features = h.at("features").get<std::size_t>();
     rows.shard = h.at("shard").get<int>();
     rows.shards = h.at("shards").get<int>();

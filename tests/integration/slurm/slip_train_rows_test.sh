@@ -45,6 +45,17 @@ head -n 1 "$tmp/shard-2.rows" | grep -qF '"grip":"paper"' || fail "no paper grip
 cmp -s <(tail -n +2 "$tmp/mixed.rows") <(tail -n +2 "$tmp/shard-2.rows") &&
   fail "the margin grip's runs logged the paper grip's rows"
 refused 1 "grip mixed" --rows-in "$tmp/shard-1.rows" "$tmp/mixed.rows"
+# --sensor drawn: the runs render each scenario's drawn sensor: other rows, the header says so,
+# and such rows are no shard of the rig sensor's training.
+"$slip_train" "${runs[@]}" --sensor drawn --shard 2/2 --rows-out "$tmp/drawn.rows" 2>"$tmp/drawn.log" ||
+  fail "drawn shard: $(tail -n 3 "$tmp/drawn.log")"
+head -n 1 "$tmp/drawn.rows" | grep -qF '"sensor":"drawn"' || fail "no sensor in the rows header: $(head -n 1 "$tmp/drawn.rows")"
+head -n 1 "$tmp/shard-2.rows" | grep -qF '"sensor"' && fail "a rig sensor's header names a sensor: $(head -n 1 "$tmp/shard-2.rows")"
+cmp -s <(tail -n +2 "$tmp/drawn.rows") <(tail -n +2 "$tmp/shard-2.rows") &&
+  fail "the drawn sensor's runs logged the rig sensor's rows"
+refused 1 "sensor drawn" --rows-in "$tmp/shard-1.rows" "$tmp/drawn.rows"
+refused 2 "--rows-in takes no --sensor" --rows-in "$tmp/shard-1.rows" --sensor drawn
+refused 2 "--sensor" --seeds 5 --scenarios 1 --sensor gaussian
 refused 2 "--rows-in takes no --grip" --rows-in "$tmp/shard-1.rows" --grip margin
 head -c 200 "$tmp/shard-2.rows" >"$tmp/cut.rows"
 refused 1 "cut.rows: the file ends within a run's rows" --rows-in "$tmp/shard-1.rows" "$tmp/cut.rows"

@@ -15,6 +15,7 @@
 #include "tactile/config/controller_file.hpp"
 #include "tactile/config/yaml.hpp"
 #include "tactile/control/config.hpp"
+#include "tactile/extractor.hpp"
 #include "tactile/rig/sensors.hpp"
 #include "tactile/util/files.hpp"
 
@@ -274,6 +275,91 @@ TEST(Scenario, SensorElementModelIsANameItKnows) {
   EXPECT_NE(e.find("sensor.element_model"), std::string::npos) << e;
   EXPECT_NE(e.find("conical"), std::string::npos) << e;
   EXPECT_NE(e.find("gaussian or feelers"), std::string::npos) << e;
+}
+
+// --- a calibration error: sensor.normal_curve_error, shear_curve_error, layout_offset_px --------
+
+// The measurement is given the erred calibration and the sensor renders the true one (docs/rig.md,
+// "Calibration error"): a pure normal load of 1 N then reads (1 + normal_curve_error) N on every
+// element, and a shear displacement of minus the layout offset.
+TEST(ScenarioCalibrationError, TheMeasurementIsGivenTheErredCalibrationTheSensorRendersTheTrue) {
+  const Scenario s = parse_scenario(
+      kMinimal +
+          "sensor: {normal_curve_error: 0.04, shear_curve_error: -0.03, layout_offset_px: [0.25, "
+          "-0.5]}\n",
+      "s.yaml");
+  const auto normals = World(s.world).element_normals();
+  const auto truth = rendered_calibrations(s, s.camera, normals);
+  const auto given = simulated_calibrations(s, s.camera, normals);
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    ASSERT_EQ(given[i].normal_curve.x().size(), truth[i].normal_curve.x().size());
+    for (std::size_t j = 0; j < truth[i].normal_curve.x().size(); ++j) {
+      EXPECT_EQ(given[i].normal_curve.x()[j], truth[i].normal_curve.x()[j]);
+      EXPECT_DOUBLE_EQ(given[i].normal_curve.y()[j], 1.04 * truth[i].normal_curve.y()[j]);
+    }
+    for (std::size_t j = 0; j < truth[i].shear_curve.x().size(); ++j) {
+      EXPECT_EQ(given[i].shear_curve.x()[j], truth[i].shear_curve.x()[j]);
+      EXPECT_DOUBLE_EQ(given[i].shear_curve.y()[j], 0.97 * truth[i].shear_curve.y()[j]);
+    }
+    for (std::size_t k = 0; k < truth[i].elements.size(); ++k) {
+      EXPECT_DOUBLE_EQ(given[i].elements[k].center_px.x, truth[i].elements[k].center_px.x + 0.25);
+      EXPECT_DOUBLE_EQ(given[i].elements[k].center_px.y, truth[i].elements[k].center_px.y - 0.5);
+      EXPECT_DOUBLE_EQ(given[i].elements[k].zero_px.x, truth[i].elements[k].zero_px.x + 0.25);
+      EXPECT_DOUBLE_EQ(given[i].elements[k].zero_px.y, truth[i].elements[k].zero_px.y - 0.5);
+    }
+  }
+  // The world's shear law is the sensor's true curve, not the erred one.
+  EXPECT_EQ(s.world.fingertip.shear_curve.odd(0.05), truth[0].shear_curve.odd(0.05));
+
+  SimulatedSensors sensors(s, s.camera, normals);
+  EXPECT_EQ(sensors.calibrations()[0].elements[3].center_px.x, given[0].elements[3].center_px.x);
+  Extractor ex(sensors.calibrations()[0]);
+  ex.begin_reference();
+  ReferenceResult ref{};
+  for (int k = 0; k < s.optics.reference_frames; ++k)
+    ref = ex.add_reference_frame(sensors.render(0, FingertipTruth{}).view());
+  ASSERT_EQ(ref.status, ReferenceStatus::kComplete);
+  FingertipTruth load{};
+  for (ElementTruth& e : load.elements)
+    e.fz_n = 1.0;
+  ASSERT_EQ(ex.measure(sensors.render(0, load).view(), {1, 0}), MeasureStatus::kOk);
+  double fz_sum = 0;
+  for (const ElementReading& m : ex.readings()) {
+    ASSERT_TRUE(m.contact) << m.id;
+    EXPECT_NEAR(m.fz, 1.04, 0.03) << m.id;
+    EXPECT_NEAR(m.ux_mm, -0.25 * s.optics.mm_per_px, 0.0015) << m.id;
+    EXPECT_NEAR(m.uy_mm, 0.5 * s.optics.mm_per_px, 0.0015) << m.id;
+    fz_sum += m.fz;
+  }
+  EXPECT_NEAR(fz_sum / static_cast<double>(ex.readings().size()), 1.04, 0.005);
+
+  // Without the keys the measurement is given the sensor's own calibration.
+  const Scenario exact = parse_scenario(kMinimal, "s.yaml");
+  const auto exact_given = simulated_calibrations(exact, exact.camera, normals);
+  const auto exact_truth = rendered_calibrations(exact, exact.camera, normals);
+  EXPECT_EQ(exact_given[1].normal_curve.y()[2], exact_truth[1].normal_curve.y()[2]);
+  EXPECT_EQ(exact_given[1].elements[40].zero_px.y, exact_truth[1].elements[40].zero_px.y);
+}
+
+TEST(ScenarioCalibrationError, BadValuesNameFileKeyAndValue) {
+  struct Bad {
+    const char* sensor;
+    const char* key;
+    const char* value;
+  };
+  const Bad bad[] = {
+      {"normal_curve_error: 0.7", "sensor.normal_curve_error", "0.7"},
+      {"shear_curve_error: -0.51", "sensor.shear_curve_error", "-0.51"},
+      {"layout_offset_px: [6, 0]", "sensor.layout_offset_px", "6"},
+      {"layout_offset_px: [0, -5.5]", "sensor.layout_offset_px", "-5.5"},
+      {"layout_offset_px: [1]", "sensor.layout_offset_px", "[dx, dy]"},
+  };
+  for (const Bad& b : bad) {
+    const std::string e = error_of(kMinimal + "sensor: {" + b.sensor + "}\n");
+    EXPECT_NE(e.find("s.yaml"), std::string::npos) << e;
+    EXPECT_NE(e.find(b.key), std::string::npos) << e;
+    EXPECT_NE(e.find(b.value), std::string::npos) << e;
+  }
 }
 
 // --- a lab's sensor: sensor.calibration (docs/rig.md, "A lab's sensor") ------------------------

@@ -269,6 +269,75 @@ TEST(SweepDraw, TheSensorSetChangesTheSensorAndNothingElse) {
     EXPECT_FALSE(sweep::sensor_set_from_string(bad).has_value()) << "accepted '" << bad << "'";
 }
 
+// `--sensor drawn` (docs/slip.md, "The drawn sensor"): a sensor per scenario from a generator of
+// its own, each value in its documented range and stated exactly by the file; the file is the
+// rig set's with the camera's shot noise, a fingertip line and a sensor line added, nothing else.
+TEST(SweepDraw, TheDrawnSensorLiesInItsRangesAndChangesTheSensorAndNothingElse) {
+  const tactile::rig::SensorOpticsParams rig_optics;
+  int feelers = 0;
+  int shot = 0;
+  int n = 0;
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    for (std::uint64_t i = 0; i < 50; ++i, ++n) {
+      const sweep::Draw d = sweep::draw_scenario(seed, i);
+      const sweep::DrawnSensor& ds = d.drawn_sensor;
+      EXPECT_TRUE(within(ds.normal_stiffness_n_per_mm, sweep::kStiffnessNPerMm))
+          << seed << " " << i;
+      EXPECT_TRUE(within(ds.spot_scale, sweep::kSpotScale)) << seed << " " << i;
+      EXPECT_TRUE(ds.shot_noise_gain == 0 || within(ds.shot_noise_gain, sweep::kShotNoiseGain));
+      EXPECT_TRUE(within(ds.normal_curve_error, sweep::kCurveError));
+      EXPECT_TRUE(within(ds.shear_curve_error, sweep::kCurveError));
+      EXPECT_TRUE(within(ds.layout_offset_x_px, sweep::kLayoutOffsetPx));
+      EXPECT_TRUE(within(ds.layout_offset_y_px, sweep::kLayoutOffsetPx));
+      feelers += ds.feelers ? 1 : 0;
+      shot += ds.shot_noise_gain > 0 ? 1 : 0;
+
+      sweep::Draw drawn = d;
+      drawn.sensor = *sweep::sensor_set_from_string("drawn");
+      std::string yaml = sweep::scenario_yaml(drawn, 12.5);
+      const tactile::rig::Scenario sc = tactile::rig::parse_scenario(yaml, "drawn.yaml");
+      EXPECT_EQ(sc.optics.element_model, ds.feelers ? tactile::rig::ElementModel::kFeelers
+                                                    : tactile::rig::ElementModel::kGaussian);
+      EXPECT_EQ(sc.world.fingertip.normal_stiffness_npm, ds.normal_stiffness_n_per_mm * 1000.0);
+      EXPECT_NEAR(sc.optics.spot_sigma_min_px, rig_optics.spot_sigma_min_px * ds.spot_scale, 1e-4);
+      EXPECT_NEAR(sc.optics.spot_sigma_max_px, rig_optics.spot_sigma_max_px * ds.spot_scale, 1e-4);
+      EXPECT_EQ(sc.camera.shot_noise_gain, ds.shot_noise_gain);
+      EXPECT_EQ(sc.optics.normal_curve_error, ds.normal_curve_error);
+      EXPECT_EQ(sc.optics.shear_curve_error, ds.shear_curve_error);
+      EXPECT_EQ(sc.optics.layout_offset_px.x, ds.layout_offset_x_px);
+      EXPECT_EQ(sc.optics.layout_offset_px.y, ds.layout_offset_y_px);
+      // Less the drawn sensor's text, the rig set's file.
+      for (const char* line : {"fingertip: {", "sensor: {"}) {
+        const auto at = yaml.find(line);
+        ASSERT_NE(at, std::string::npos) << yaml;
+        yaml.erase(at, yaml.find('\n', at) + 1 - at);
+      }
+      if (ds.shot_noise_gain > 0) {
+        const std::string gain = fmt::format("shot_noise_gain: {}, ", ds.shot_noise_gain);
+        const auto at = yaml.find(gain);
+        ASSERT_NE(at, std::string::npos) << yaml;
+        yaml.erase(at, gain.size());
+      }
+      EXPECT_EQ(yaml, sweep::scenario_yaml(d, 12.5));
+    }
+  }
+  // Their shares, 500 draws: binomial standard deviation about 0.022.
+  EXPECT_NEAR(static_cast<double>(feelers) / n, sweep::kFeelerShare, 0.08);
+  EXPECT_NEAR(static_cast<double>(shot) / n, sweep::kShotNoiseShare, 0.08);
+  // The table says the element model of every set, the rest only for the drawn one (a failed
+  // run's row holds the draw's cells alone).
+  sweep::Draw d = sweep::draw_scenario(20, 3);
+  EXPECT_EQ(sweep::failed_row(d, "learned", 1, "").at("element_model"), "gaussian");
+  EXPECT_EQ(sweep::failed_row(d, "learned", 1, "").at("spot_scale"), "");
+  d.sensor = sweep::SensorSet::kFeelers;
+  EXPECT_EQ(sweep::failed_row(d, "learned", 1, "").at("element_model"), "feelers");
+  d.sensor = sweep::SensorSet::kDrawn;
+  const sweep::Row row = sweep::failed_row(d, "learned", 1, "");
+  EXPECT_EQ(row.at("element_model"), d.drawn_sensor.feelers ? "feelers" : "gaussian");
+  EXPECT_EQ(row.number("spot_scale"), d.drawn_sensor.spot_scale);
+  EXPECT_EQ(row.number("layout_offset_y_px"), d.drawn_sensor.layout_offset_y_px);
+}
+
 // `--calibration FILE` (docs/slip.md, "Retraining for your own sensor"): every scenario's camera
 // takes the file's image and its sensor section names the file (quoted as YAML quotes it, beside
 // the feeler element when both are asked); nothing else of the draw changes. sweep.json says the

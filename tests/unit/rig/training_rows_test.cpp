@@ -81,6 +81,19 @@ TEST(TrainingRows, TheLabsCalibrationRoundTripsAndIsAbsentWithoutOne) {
   EXPECT_EQ(train::rows_file(train::parse_rows_file(bytes, "x.rows")), bytes);
 }
 
+// slip_train --sensor: the header says a set other than the rig's, and a file without the key is
+// the rig's (its bytes as before).
+TEST(TrainingRows, TheSensorSetRoundTripsAndIsAbsentForTheRigs) {
+  train::TrainingRows rows = sample();
+  EXPECT_EQ(train::rows_file(rows).find("sensor"), std::string::npos);
+  EXPECT_EQ(train::parse_rows_file(train::rows_file(rows), "x.rows").sensor, "rig");
+  rows.sensor = "drawn";
+  const std::string bytes = train::rows_file(rows);
+  EXPECT_NE(bytes.find("\"sensor\":\"drawn\""), std::string::npos);
+  EXPECT_EQ(train::parse_rows_file(bytes, "x.rows").sensor, "drawn");
+  EXPECT_EQ(train::rows_file(train::parse_rows_file(bytes, "x.rows")), bytes);
+}
+
 TEST(TrainingRows, EveryCutAndAnyTrailingByteIsRefusedNamingTheFile) {
   const std::string bytes = train::rows_file(sample());
   for (std::size_t n = 0; n < bytes.size(); ++n) {

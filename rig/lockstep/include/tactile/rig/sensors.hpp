@@ -21,8 +21,15 @@ namespace tactile::rig {
 // The fingertips' sensor ids, in fingertip order.
 inline constexpr std::array<const char*, kFingertips> kFingertipIds{"left", "right"};
 
-// The two simulated sensors' calibrations for this scenario and camera: make_calibration's, or
-// the scenario's sensor.calibration under each fingertip's id.
+// The two simulated sensors' true calibrations for this scenario and camera, the ones they are
+// rendered with: make_calibration's, or the scenario's sensor.calibration under each
+// fingertip's id.
+std::array<Calibration, kFingertips> rendered_calibrations(const Scenario& scenario,
+                                                           const CameraParams& camera,
+                                                           std::span<const Vec3> normals);
+// The calibrations sensor_node and hand_node are given: the rendered ones with the scenario's
+// calibration error (as_calibrated). Throws std::runtime_error, naming the file and
+// sensor.layout_offset_px, when the offset moves a disk off the image.
 std::array<Calibration, kFingertips> simulated_calibrations(const Scenario& scenario,
                                                             const CameraParams& camera,
                                                             std::span<const Vec3> normals);
@@ -37,6 +44,7 @@ class SimulatedSensors {
   SimulatedSensors(const Scenario& scenario, const CameraParams& camera,
                    std::span<const Vec3> normals);
 
+  // The calibrations the measurement is given (simulated_calibrations).
   const std::array<Calibration, kFingertips>& calibrations() const { return calibrations_; }
   TruthRecorder& truth() { return truth_; }
   // Renders fingertip i's image of the loads in `truth` (all zero: no load). Allocates nothing
@@ -49,6 +57,7 @@ class SimulatedSensors {
   void image_truth(std::size_t fingertip, FingertipTruth& truth) const;
 
  private:
+  std::array<Calibration, kFingertips> rendered_;
   std::array<Calibration, kFingertips> calibrations_;
   std::vector<Renderer> renderers_;
   std::array<util::Random, kFingertips> frame_rng_;

@@ -96,6 +96,13 @@ struct SensorOpticsParams {
   double noise_floor_min = 4.0;     // the calibration's noise_floor is the larger of this
   double noise_floor_sigmas = 3.0;  // and this many background noise sigmas
   int reference_frames = 16;        // frames the measurement's no-load reference averages
+  // The calibration sensor_node and hand_node are given, against the sensor rendered: a lab's
+  // calibration error (docs/rig.md, "Calibration error"). The forces of its normal and shear
+  // curves are (1 + error) times the sensor's, every element's centre and zero are moved by
+  // layout_offset_px.
+  double normal_curve_error = 0;
+  double shear_curve_error = 0;
+  Vec2 layout_offset_px{0, 0};
 };
 
 // Gray-level scale of the image relative to 8-bit units (1 or 257).
@@ -107,6 +114,10 @@ double level_scale(int bit_depth);
 // scaled to the bit depth), and each element's inward normal.
 Calibration make_calibration(const std::string& sensor_id, const CameraParams& cam,
                              const SensorOpticsParams& opt, std::span<const Vec3> normals);
+
+// The calibration the measurement is given for a sensor whose true calibration is `truth`: the
+// curves' forces and the layout as SensorOpticsParams' calibration error says. Pure.
+Calibration as_calibrated(const Calibration& truth, const SensorOpticsParams& opt);
 
 // What an element's spot shows: its normal force and its shear displacement (mm, along the
 // image's columns and rows).

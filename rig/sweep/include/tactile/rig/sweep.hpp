@@ -77,12 +77,35 @@ inline constexpr double kKnockDurationS = 0.005;
 inline constexpr Range kCrushOverNeed{2.0, 6.0};
 
 // The sensor every scenario of a sweep sees (`rig --sweep --sensor NAME`, docs/slip.md): kRig,
-// the rig's own (the Gaussian spot; the files say nothing of the sensor), or kFeelers, the paper's
-// feeler element on every scenario (sensor.element_model: feelers). Nothing of the draw changes.
-enum class SensorSet { kRig, kFeelers };
+// the rig's own (the Gaussian spot; the files say nothing of the sensor), kFeelers, the paper's
+// feeler element on every scenario (sensor.element_model: feelers), or kDrawn, a sensor drawn per
+// scenario (DrawnSensor below). Nothing else of the draw changes.
+enum class SensorSet { kRig, kFeelers, kDrawn };
 std::optional<SensorSet> sensor_set_from_string(std::string_view name);
 // The names sensor_set_from_string accepts, for error messages.
-inline constexpr const char* kSensorSetNames = "rig or feelers";
+inline constexpr const char* kSensorSetNames = "rig, feelers or drawn";
+
+// The drawn sensor's ranges (SensorSet::kDrawn; docs/slip.md, "The drawn sensor").
+inline constexpr double kFeelerShare = 0.5;         // the paper's feeler element, else Gaussian
+inline constexpr Range kStiffnessNPerMm{1.0, 2.5};  // fingertip.normal_stiffness_n_per_mm
+inline constexpr Range kSpotScale{0.8, 1.25};       // times the spot's sigma_min and sigma_max
+inline constexpr double kShotNoiseShare = 0.5;      // shot noise, else read noise alone
+inline constexpr Range kShotNoiseGain{5.0, 50.0};   // camera.shot_noise_gain, e- per level
+inline constexpr Range kCurveError{-0.05, 0.05};    // sensor.normal_ and shear_curve_error
+inline constexpr Range kLayoutOffsetPx{-0.5, 0.5};  // sensor.layout_offset_px, each axis
+
+// One drawn sensor: from a generator of its own, drawn for every scenario whatever the set (the
+// draw's other values are untouched by it), written into the file only for SensorSet::kDrawn.
+struct DrawnSensor {
+  bool feelers = false;
+  double normal_stiffness_n_per_mm = 0;
+  double spot_scale = 0;
+  double shot_noise_gain = 0;  // 0: none
+  double normal_curve_error = 0;
+  double shear_curve_error = 0;
+  double layout_offset_x_px = 0;
+  double layout_offset_y_px = 0;
+};
 
 // One drawn scenario. Values are rounded to a fixed grid (0.1 g, 0.01 mm, 0.001, 0.1 deg, 1 um,
 // 0.01 Hz, 0.01 levels, whole fps) so that the scenario file states them exactly.
@@ -121,6 +144,7 @@ struct Draw {
   // unused, and the file says sensor.calibration.
   SensorSet sensor = SensorSet::kRig;
   std::optional<LabSensor> lab_sensor;
+  DrawnSensor drawn_sensor;
 };
 
 // Scenario `index` of the sweep with seed `sweep_seed`: depends on nothing else. Pure.

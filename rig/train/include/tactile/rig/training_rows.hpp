@@ -35,6 +35,9 @@ struct TrainingRows {
   // A lab's sensor the runs rendered (slip_train --calibration, absolute); empty: the rig's own.
   // Written only when set, so files without it keep their bytes.
   std::string calibration;
+  // The sweep's sensor set the runs drew (slip_train --sensor: rig, feelers or drawn). Written
+  // only when not rig, so files without it keep their bytes.
+  std::string sensor = "rig";
   std::size_t features = 0;
   int shard = 1;  // K of shards
   int shards = 1;
