@@ -211,7 +211,14 @@ int main(int argc, char** argv) {
                  "the sensor of the training runs, as rig --sweep --sensor: rig (the rig's "
                  "Gaussian spot), feelers (the paper's feeler element) or drawn (one drawn per "
                  "scenario) (docs/slip.md, \"The drawn sensor\")")
-      ->check(CLI::IsMember({"rig", "feelers", "drawn"}))
+      ->check(CLI::Validator(
+          [](const std::string& name) {
+            return rig::sweep::sensor_set_from_string(name)
+                       ? std::string()
+                       : "must be " + std::string(rig::sweep::kSensorSetNames) + "; got '" + name +
+                             "'";
+          },
+          "SET"))
       ->capture_default_str();
   std::string shard;
   std::string rows_out;

@@ -14,6 +14,24 @@ double visible_fz_n(const Calibration& cal) {
   return cal.normal_curve(cal.contact_on);
 }
 
+// The rendered calibrations as the measurement is given them (the scenario's calibration error).
+std::array<Calibration, kFingertips> given_calibrations(
+    const Scenario& sc, const std::array<Calibration, kFingertips>& rendered) {
+  std::array<Calibration, kFingertips> cals;
+  for (std::size_t i = 0; i < kFingertips; ++i) {
+    cals[i] = as_calibrated(rendered[i], sc.optics);
+    try {
+      validate(cals[i]);
+    } catch (const CalibrationError& e) {
+      throw std::runtime_error(fmt::format(
+          "{}: sensor.layout_offset_px [{}, {}] moves {}'s calibration off its image: {}",
+          sc.source, sc.optics.layout_offset_px.x, sc.optics.layout_offset_px.y, cals[i].sensor_id,
+          e.what()));
+    }
+  }
+  return cals;
+}
+
 }  // namespace
 
 std::array<Calibration, kFingertips> rendered_calibrations(const Scenario& sc,
@@ -36,19 +54,7 @@ std::array<Calibration, kFingertips> rendered_calibrations(const Scenario& sc,
 std::array<Calibration, kFingertips> simulated_calibrations(const Scenario& sc,
                                                             const CameraParams& camera,
                                                             std::span<const Vec3> normals) {
-  std::array<Calibration, kFingertips> cals = rendered_calibrations(sc, camera, normals);
-  for (Calibration& cal : cals) {
-    cal = as_calibrated(cal, sc.optics);
-    try {
-      validate(cal);
-    } catch (const CalibrationError& e) {
-      throw std::runtime_error(fmt::format(
-          "{}: sensor.layout_offset_px [{}, {}] moves {}'s calibration off its image: {}",
-          sc.source, sc.optics.layout_offset_px.x, sc.optics.layout_offset_px.y, cal.sensor_id,
-          e.what()));
-    }
-  }
-  return cals;
+  return given_calibrations(sc, rendered_calibrations(sc, camera, normals));
 }
 
 std::vector<std::filesystem::path> save_calibrations(
@@ -64,7 +70,7 @@ std::vector<std::filesystem::path> save_calibrations(
 SimulatedSensors::SimulatedSensors(const Scenario& sc, const CameraParams& camera,
                                    std::span<const Vec3> normals)
     : rendered_(rendered_calibrations(sc, camera, normals)),
-      calibrations_(simulated_calibrations(sc, camera, normals)),
+      calibrations_(given_calibrations(sc, rendered_)),
       frame_rng_{util::Random(util::splitmix64(sc.seed * 4 + 1)),
                  util::Random(util::splitmix64(sc.seed * 4 + 2))},
       truth_(visible_fz_n(rendered_[0]), sc.partial_slip_ratio),

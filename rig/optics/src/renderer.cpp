@@ -191,10 +191,8 @@ Calibration as_calibrated(const Calibration& truth, const SensorOpticsParams& op
       v *= 1.0 + error;
     return PiecewiseLinear(std::vector<double>(c.x().begin(), c.x().end()), std::move(y));
   };
-  if (opt.normal_curve_error != 0)
-    cal.normal_curve = scaled(truth.normal_curve, opt.normal_curve_error);
-  if (opt.shear_curve_error != 0)
-    cal.shear_curve = scaled(truth.shear_curve, opt.shear_curve_error);
+  cal.normal_curve = scaled(truth.normal_curve, opt.normal_curve_error);
+  cal.shear_curve = scaled(truth.shear_curve, opt.shear_curve_error);
   for (ElementCalibration& e : cal.elements) {
     e.center_px = {e.center_px.x + opt.layout_offset_px.x, e.center_px.y + opt.layout_offset_px.y};
     e.zero_px = {e.zero_px.x + opt.layout_offset_px.x, e.zero_px.y + opt.layout_offset_px.y};

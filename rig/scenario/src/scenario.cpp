@@ -47,6 +47,21 @@ double want(const Node& sec, std::string_view key, double fallback, double lo, d
   return n ? checked(*n, lo, hi) : fallback;
 }
 
+// A pair [dx, dy] in `units` (`unit` for short), each within [-limit, limit] (bottle.displaced_mm,
+// sensor.layout_offset_px).
+std::array<double, 2> offset_pair(const Node& n, double limit, const char* units,
+                                  const char* unit) {
+  const std::vector<double> v = n.as_doubles();
+  if (v.size() != 2) n.fail(std::string("must be [dx, dy] in ") + units);
+  for (const double d : v) {
+    if (!(std::abs(d) <= limit)) {
+      n.fail("must be within [-" + number_text(limit) + ", " + number_text(limit) + "] " + unit +
+             " each, is " + number_text(d));
+    }
+  }
+  return {v[0], v[1]};
+}
+
 // A named choice (slip_detector, grip, element_model), refused unless `parse` knows it.
 template <typename Parse>
 std::string choice(const Node& n, Parse parse, const char* names) {
@@ -135,12 +150,7 @@ void parse_bottle(const Node& bottle, BottleParams& bp) {
       want(bottle, "capture_radius_mm", bp.capture_radius_m * 1000.0, 0.1, 20.0) / 1000.0;
   bp.tighten_clockwise = bottle.get("tighten_clockwise", bp.tighten_clockwise);
   if (auto displaced = bottle.find("displaced_mm")) {
-    const std::vector<double> v = displaced->as_doubles();
-    if (v.size() != 2) displaced->fail("must be [dx, dy] in millimetres");
-    for (const double d : v) {
-      if (!(std::abs(d) <= 1000.0))
-        displaced->fail("must be within [-1000, 1000] mm each, is " + number_text(d));
-    }
+    const std::array<double, 2> v = offset_pair(*displaced, 1000.0, "millimetres", "mm");
     bp.displaced_x_m = v[0] / 1000.0;
     bp.displaced_y_m = v[1] / 1000.0;
   }
@@ -212,13 +222,7 @@ void parse_optics(const Node& so, SensorOpticsParams& o) {
   o.normal_curve_error = want(so, "normal_curve_error", o.normal_curve_error, -0.5, 0.5);
   o.shear_curve_error = want(so, "shear_curve_error", o.shear_curve_error, -0.5, 0.5);
   if (auto offset = so.find("layout_offset_px")) {
-    const std::vector<double> v = offset->as_doubles();
-    if (v.size() != 2) offset->fail("must be [dx, dy] in pixels");
-    for (const double d : v) {
-      if (!(std::abs(d) <= 5.0)) {
-        offset->fail("must be within [-5, 5] px each, is " + number_text(d));
-      }
-    }
+    const std::array<double, 2> v = offset_pair(*offset, 5.0, "pixels", "px");
     o.layout_offset_px = {v[0], v[1]};
   }
 }

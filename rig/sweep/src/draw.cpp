@@ -100,20 +100,21 @@ void draw_disturbance(std::uint64_t sweep_seed, std::uint64_t index, Draw& d) {
 DrawnSensor draw_sensor(std::uint64_t sweep_seed, std::uint64_t index) {
   constexpr std::uint64_t kSalt = 0x73656e736f722121ULL;  // "sensor!!"
   util::Random rng(util::splitmix64(util::splitmix64(sweep_seed ^ kSalt) ^ index));
-  const auto hundredths = [&](Range r) {
-    return on_grid(rng, {r.lo * 100, r.hi * 100}, 1.0) / 100;
+  // On a grid of 1 / per_unit (whole steps over an exact power of ten: the file states it exactly).
+  const auto grid = [&](Range r, double per_unit) {
+    return on_grid(rng, {r.lo * per_unit, r.hi * per_unit}, 1.0) / per_unit;
   };
   DrawnSensor s;
   s.feelers = rng.uniform() < kFeelerShare;
-  s.normal_stiffness_n_per_mm = hundredths(kStiffnessNPerMm);
-  s.spot_scale = hundredths(kSpotScale);
+  s.normal_stiffness_n_per_mm = grid(kStiffnessNPerMm, 100);
+  s.spot_scale = grid(kSpotScale, 100);
   const bool shot = rng.uniform() < kShotNoiseShare;
-  const double gain = on_grid(rng, {kShotNoiseGain.lo * 10, kShotNoiseGain.hi * 10}, 1.0) / 10;
+  const double gain = grid(kShotNoiseGain, 10);
   s.shot_noise_gain = shot ? gain : 0.0;
-  s.normal_curve_error = on_grid(rng, {kCurveError.lo * 1000, kCurveError.hi * 1000}, 1.0) / 1000;
-  s.shear_curve_error = on_grid(rng, {kCurveError.lo * 1000, kCurveError.hi * 1000}, 1.0) / 1000;
-  s.layout_offset_x_px = hundredths(kLayoutOffsetPx);
-  s.layout_offset_y_px = hundredths(kLayoutOffsetPx);
+  s.normal_curve_error = grid(kCurveError, 1000);
+  s.shear_curve_error = grid(kCurveError, 1000);
+  s.layout_offset_x_px = grid(kLayoutOffsetPx, 100);
+  s.layout_offset_y_px = grid(kLayoutOffsetPx, 100);
   return s;
 }
 
